@@ -1,0 +1,410 @@
+"""Scene configuration: frozen dataclasses for every stage and their loader.
+
+A configuration is a TOML or JSON file in ``envs_configs/``, a plain dict, or ``None``
+for the built-in default scene. The defaults written here are the same as the files
+ship, so an installed wheel works without the folder. Unknown keys and bad values
+raise :class:`ConfigError` naming the key and the file.
+
+All quantities are SI (metres, kilograms, seconds, newtons, radians).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import tomllib
+import types
+import typing
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+__all__ = [
+    "ConfigError",
+    "ContactConfig",
+    "ObjectConfig",
+    "PhysicsConfig",
+    "ProxyConfig",
+    "SceneConfig",
+    "SurfaceConfig",
+    "load_config",
+]
+
+ShapeName = Literal["box", "sphere", "cylinder"]
+ProxyName = Literal["persistent", "instant", "rigid"]
+MatcherName = Literal["fast", "exhaustive"]
+
+
+class ConfigError(ValueError):
+    """A configuration key is unknown or its value is not what the key expects."""
+
+
+@dataclass(frozen=True)
+class SurfaceConfig:
+    """The imaging table.
+
+    Attributes:
+        size: table top (width, height) in metres.
+        resolution: camera image (columns W, rows H) in pixels.
+        fps: camera frames per second.
+    """
+
+    size: tuple[float, float] = (0.61, 0.46)
+    resolution: tuple[int, int] = (640, 480)
+    fps: float = 60.0
+
+    def __post_init__(self) -> None:
+        _positive("surface.size", self.size)
+        _positive("surface.resolution", self.resolution)
+        _positive("surface.fps", (self.fps,))
+
+
+@dataclass(frozen=True)
+class ContactConfig:
+    """How a mask becomes tracked contours.
+
+    Attributes:
+        spacing: arc-length spacing of resampled contour points, metres.
+        match_radius: largest centroid travel, metres per frame, for a contact to keep
+            its id from one frame to the next.
+        min_area: components smaller than this many pixels are dropped as noise
+            (0 keeps single pixels).
+    """
+
+    spacing: float = 0.004
+    match_radius: float = 0.03
+    min_area: float = 0.0
+
+    def __post_init__(self) -> None:
+        _positive("contacts.spacing", (self.spacing,))
+        _positive("contacts.match_radius", (self.match_radius,))
+        if self.min_area < 0:
+            raise ConfigError(f"contacts.min_area must be >= 0, got {self.min_area}")
+
+
+@dataclass(frozen=True)
+class ObjectConfig:
+    """A rigid object that starts resting on the table.
+
+    Attributes:
+        name: unique name used by ``Simulation.object_pose(name)``.
+        shape: ``box``, ``sphere`` or ``cylinder``.
+        size: full extents ``[x, y, z]`` (box), ``[radius]`` (sphere) or
+            ``[radius, height]`` (cylinder), metres.
+        mass: kilograms.
+        position: centre (x, y) on the table, metres, world frame.
+        yaw: rotation about z, radians.
+        friction: lateral friction coefficient (Bullet multiplies the two bodies').
+        rolling_friction: Bullet's rolling friction coefficient.
+        spinning_friction: Bullet's spinning (torsional) friction coefficient.
+        restitution: coefficient of restitution.
+    """
+
+    name: str
+    shape: ShapeName
+    size: tuple[float, ...]
+    mass: float = 0.2
+    position: tuple[float, float] = (0.0, 0.0)
+    yaw: float = 0.0
+    friction: float = 0.5
+    rolling_friction: float = 0.0
+    spinning_friction: float = 0.0
+    restitution: float = 0.0
+
+    def __post_init__(self) -> None:
+        expected = {"box": 3, "sphere": 1, "cylinder": 2}[self.shape]
+        if len(self.size) != expected:
+            raise ConfigError(
+                f"objects[{self.name}].size for a {self.shape} needs {expected} value(s), "
+                f"got {list(self.size)}"
+            )
+        _positive(f"objects[{self.name}].size", self.size)
+        _positive(f"objects[{self.name}].mass", (self.mass,))
+        for key in ("friction", "rolling_friction", "spinning_friction", "restitution"):
+            if getattr(self, key) < 0:
+                raise ConfigError(f"objects[{self.name}].{key} must be >= 0")
+
+    @property
+    def height(self) -> float:
+        """Height of the object's top above the table when resting, metres."""
+        if self.shape == "box":
+            return self.size[2]
+        if self.shape == "sphere":
+            return 2.0 * self.size[0]
+        return self.size[1]
+
+
+@dataclass(frozen=True)
+class ProxyConfig:
+    """How contact contours become particle bodies.
+
+    Attributes:
+        method: ``persistent`` (Wilson ITS 2009), ``instant`` (UIST 2008) or ``rigid``.
+        particle_radius: sphere radius, metres.
+        particle_mass: kilograms per sphere.
+        particle_friction: lateral friction of a particle. Bullet multiplies it by the
+            object's: the default 2.0 gives a finger–object coefficient of 1.0 on a 0.5
+            object, which a firm squeeze needs to resist a third finger's push; a
+            bottom particle's friction acts only in the table plane.
+        window: n in the windowed sum of squared distances (points each side, total n+1).
+        matcher: ``fast`` (FFT alignment then a local search) or ``exhaustive``.
+        search: half-width S of the fast matcher's local search, contour indices.
+        stack_layers: spheres per contour point (1 = single layer).
+        stack_spacing: height between stacked spheres, metres.
+        down_force: constant downward force on each bottom particle, newtons.
+        penetration_limit: place a contact that appears deep inside an object's
+            footprint on its top face.
+        penetration_margin: how deep inside a footprint, metres, a contour point must
+            be for the penetration limit to put its particle on the top face. Keep it
+            about 1 mm above the deepest squeeze that should hold an object.
+        track_hand_rotation: estimate one rigid rotation of the hand from all its
+            contacts' centroids and apply it to previous points before matching.
+        predicted_resampling: resample a continuing contour starting from the
+            predicted previous points, so points do not jitter along the contour.
+        instant_stride: pixel subsample of the instant method's gradient pixels.
+        rigid_height: height of the rigid method's contact bodies, metres.
+    """
+
+    method: ProxyName = "persistent"
+    particle_radius: float = 0.002
+    particle_mass: float = 0.01
+    particle_friction: float = 2.0
+    window: int = 4
+    matcher: MatcherName = "fast"
+    search: int = 3
+    stack_layers: int = 1
+    stack_spacing: float = 0.004
+    down_force: float = 0.05
+    penetration_limit: bool = True
+    penetration_margin: float = 0.005
+    rigid_height: float = 0.01
+    track_hand_rotation: bool = True
+    predicted_resampling: bool = True
+    instant_stride: int = 2
+
+    def __post_init__(self) -> None:
+        _positive("proxy.particle_radius", (self.particle_radius,))
+        _positive("proxy.particle_mass", (self.particle_mass,))
+        _positive("proxy.stack_layers", (self.stack_layers,))
+        _positive("proxy.instant_stride", (self.instant_stride,))
+        _positive("proxy.rigid_height", (self.rigid_height,))
+        for key in ("window", "search"):
+            if getattr(self, key) < 0:
+                raise ConfigError(f"proxy.{key} must be >= 0, got {getattr(self, key)}")
+        if self.particle_friction < 0 or self.down_force < 0 or self.stack_spacing < 0:
+            raise ConfigError("proxy.particle_friction, down_force, stack_spacing must be >= 0")
+        if self.penetration_margin < 0:
+            raise ConfigError(
+                f"proxy.penetration_margin must be >= 0, got {self.penetration_margin}"
+            )
+
+
+@dataclass(frozen=True)
+class PhysicsConfig:
+    """Bullet settings.
+
+    Attributes:
+        substeps: physics steps per camera frame; the particle force law is recomputed
+            on every one of them (Bullet's own ``numSubSteps`` would reapply a stale force).
+        solver_iterations: Bullet's constraint solver iterations.
+        gravity: metres per second squared, pointing down.
+        table_friction: the table's lateral friction coefficient.
+        max_particle_force: clamp on each particle's planar control force, newtons.
+        max_particle_speed: clamp on each particle's commanded speed, m/s.
+        ccd: continuous collision detection for particles (swept sphere).
+        allowed_ccd_penetration: Bullet's allowed CCD penetration, metres.
+        contact_breaking_threshold: Bullet's contact breaking threshold, metres.
+        control_time: Δt of the particle control law (v* = (x* − x)/Δt,
+            a* = (v* − v)/Δt), seconds. A particle held off its contour point by a
+            depth d pushes with m·d/Δt², so this and ``proxy.particle_mass`` set the
+            grip stiffness. It is kept apart from the sub-step so that more sub-steps
+            resolve the same law more finely instead of stiffening it; the law uses
+            the sub-step instead when that is longer (the law is unstable otherwise).
+        pool_batch: particle bodies created at start and at each growth of the pool.
+    """
+
+    substeps: int = 4
+    solver_iterations: int = 50
+    gravity: float = 9.81
+    table_friction: float = 0.5
+    max_particle_force: float = 5.0
+    max_particle_speed: float = 5.0
+    ccd: bool = True
+    allowed_ccd_penetration: float = 0.0005
+    contact_breaking_threshold: float = 0.001
+    control_time: float = 1.0 / 240.0
+    pool_batch: int = 64
+
+    def __post_init__(self) -> None:
+        _positive("physics.substeps", (self.substeps,))
+        _positive("physics.control_time", (self.control_time,))
+        _positive("physics.pool_batch", (self.pool_batch,))
+        _positive("physics.solver_iterations", (self.solver_iterations,))
+        _positive("physics.max_particle_force", (self.max_particle_force,))
+        _positive("physics.max_particle_speed", (self.max_particle_speed,))
+        if self.gravity < 0 or self.table_friction < 0:
+            raise ConfigError("physics.gravity and physics.table_friction must be >= 0")
+
+
+def _default_objects() -> tuple[ObjectConfig, ...]:
+    return (ObjectConfig(name="box", shape="box", size=(0.06, 0.06, 0.03), mass=0.2),)
+
+
+@dataclass(frozen=True)
+class SceneConfig:
+    """Everything one simulation needs; the built-in default is a 6 cm box."""
+
+    surface: SurfaceConfig = field(default_factory=SurfaceConfig)
+    contacts: ContactConfig = field(default_factory=ContactConfig)
+    objects: tuple[ObjectConfig, ...] = field(default_factory=_default_objects)
+    proxy: ProxyConfig = field(default_factory=ProxyConfig)
+    physics: PhysicsConfig = field(default_factory=PhysicsConfig)
+
+    def __post_init__(self) -> None:
+        names = [o.name for o in self.objects]
+        duplicates = sorted({n for n in names if names.count(n) > 1})
+        if duplicates:
+            raise ConfigError(f"objects: names must be unique, repeated: {duplicates}")
+
+    def replace(self, **sections: Any) -> SceneConfig:
+        """A copy with whole sections or section fields replaced (dicts are merged)."""
+        return _build(SceneConfig, _merge(to_dict(self), sections), "scene", "<overrides>")
+
+
+def to_dict(config: Any) -> Any:
+    """Plain dicts, lists and scalars of a configuration (for run folders and JSON)."""
+    if dataclasses.is_dataclass(config) and not isinstance(config, type):
+        return {f.name: to_dict(getattr(config, f.name)) for f in dataclasses.fields(config)}
+    if isinstance(config, tuple | list):
+        return [to_dict(v) for v in config]
+    return config
+
+
+def load_config(
+    config: str | Path | Mapping[str, Any] | SceneConfig | None = None, **overrides: Any
+) -> SceneConfig:
+    """Build a :class:`SceneConfig` from a file, a dict or the built-in default.
+
+    Args:
+        config: path to a ``.toml`` or ``.json`` file, a mapping with the same keys,
+            a ready ``SceneConfig``, or ``None`` for the default scene.
+        **overrides: sections merged over the configuration, e.g.
+            ``proxy={"method": "rigid"}`` or ``objects=[...]``.
+
+    Raises:
+        ConfigError: a key is unknown or a value is not what its key expects; the
+            message names the key and the file.
+        FileNotFoundError: the path does not exist.
+    """
+    source = "<dict>"
+    if config is None:
+        data: dict[str, Any] = {}
+        source = "<default>"
+    elif isinstance(config, SceneConfig):
+        data = to_dict(config)
+        source = "<SceneConfig>"
+    elif isinstance(config, Mapping):
+        data = dict(config)
+    else:
+        path = Path(config)
+        source = str(path)
+        if not path.is_file():
+            raise FileNotFoundError(f"configuration file not found: {path}")
+        text = path.read_text()
+        try:
+            data = json.loads(text) if path.suffix == ".json" else tomllib.loads(text)
+        except (json.JSONDecodeError, tomllib.TOMLDecodeError) as err:
+            raise ConfigError(f"{path}: cannot parse: {err}") from err
+    if overrides:
+        data = _merge(data, overrides)
+    return _build(SceneConfig, data, "", source)
+
+
+# -- validation ----------------------------------------------------------------------
+
+
+def _positive(key: str, values: tuple[float, ...] | tuple[int, ...]) -> None:
+    for v in values:
+        if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+            raise ConfigError(f"{key} must be finite and > 0, got {list(values)}")
+
+
+def _merge(base: Mapping[str, Any], extra: Mapping[str, Any]) -> dict[str, Any]:
+    merged = dict(base)
+    for key, value in extra.items():
+        if isinstance(value, Mapping) and isinstance(merged.get(key), Mapping):
+            merged[key] = _merge(merged[key], value)
+        else:
+            merged[key] = value
+    return merged
+
+
+def _build(cls: type, data: Any, prefix: str, source: str) -> Any:
+    if not isinstance(data, Mapping):
+        raise ConfigError(f"{source}: '{prefix or 'scene'}' must be a table, got {data!r}")
+    hints = typing.get_type_hints(cls)
+    fields = {f.name: f for f in dataclasses.fields(cls)}
+    unknown = sorted(set(data) - set(fields))
+    if unknown:
+        where = f"'{prefix}.{unknown[0]}'" if prefix else f"'{unknown[0]}'"
+        raise ConfigError(f"{source}: unknown key {where}; expected one of {sorted(fields)}")
+    kwargs = {}
+    for name, value in data.items():
+        key = f"{prefix}.{name}" if prefix else name
+        kwargs[name] = _convert(hints[name], value, key, source)
+    try:
+        return cls(**kwargs)
+    except ConfigError as err:
+        raise ConfigError(f"{source}: {err}") from None
+    except TypeError as err:  # a required key is missing
+        raise ConfigError(f"{source}: '{prefix or 'scene'}': {err}") from None
+
+
+def _convert(hint: Any, value: Any, key: str, source: str) -> Any:
+    origin = typing.get_origin(hint)
+    args = typing.get_args(hint)
+    if isinstance(hint, type) and dataclasses.is_dataclass(hint):
+        return _build(hint, value, key, source)
+    if origin is Literal:
+        if value not in args:
+            raise ConfigError(f"{source}: '{key}' must be one of {list(args)}, got {value!r}")
+        return value
+    if origin is tuple:
+        if not isinstance(value, list | tuple):
+            raise ConfigError(f"{source}: '{key}' must be a list, got {value!r}")
+        if len(args) == 2 and args[1] is Ellipsis:
+            return tuple(_convert(args[0], v, f"{key}[{i}]", source) for i, v in enumerate(value))
+        if len(value) != len(args):
+            raise ConfigError(f"{source}: '{key}' must have {len(args)} values, got {list(value)}")
+        return tuple(
+            _convert(a, v, f"{key}[{i}]", source)
+            for i, (a, v) in enumerate(zip(args, value, strict=True))
+        )
+    if origin in (typing.Union, types.UnionType):
+        for arg in args:
+            try:
+                return _convert(arg, value, key, source)
+            except ConfigError:
+                continue
+        raise ConfigError(f"{source}: '{key}' has an unexpected value {value!r}")
+    if hint is bool:
+        if not isinstance(value, bool):
+            raise ConfigError(f"{source}: '{key}' must be true or false, got {value!r}")
+        return value
+    if hint is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(f"{source}: '{key}' must be an integer, got {value!r}")
+        return value
+    if hint is float:
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            raise ConfigError(f"{source}: '{key}' must be a number, got {value!r}")
+        if not math.isfinite(value):
+            raise ConfigError(f"{source}: '{key}' must be finite, got {value!r}")
+        return float(value)
+    if hint is str:
+        if not isinstance(value, str):
+            raise ConfigError(f"{source}: '{key}' must be a string, got {value!r}")
+        return value
+    return value

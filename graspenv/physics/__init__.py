@@ -1,0 +1,34 @@
+"""Physics: the only package that imports PyBullet.
+
+:class:`PhysicsWorld` holds the table, the objects and a :class:`ParticlePool` of
+sphere proxies. The proxies stage drives it once per camera frame:
+
+1. touch-down: ``ids = world.pool.acquire(n)``; ``world.ray_heights(xy)`` gives the
+   surface under each new contour point (particles are transparent to it), and
+   ``world.pool.place(ids, xyz)`` puts each particle there at z = height + radius
+   (stack layer l at ``l · proxy.stack_spacing`` above). ``world.object_footprint``
+   tells which points lie deeper than ``proxy.penetration_margin`` inside an
+   object's footprint (DESIGN step 7);
+2. lift-off: ``world.pool.release(ids)``;
+3. every frame: ``world.step_frame(ids, targets, spin)`` with every active particle
+   (shape (K,) or (K, L) for stacks), its contour point (K, 2) and the contour's
+   rotation rate about z; it returns the particles' positions after the frame.
+
+Grasp metrics read ``world.contact_report(name)``.
+"""
+
+from __future__ import annotations
+
+from graspenv.physics.pool import OBJECT_GROUP, PARTICLE_GROUP, STATIC_GROUP, ParticlePool
+from graspenv.physics.world import ContactReport, FootprintHits, PhysicsWorld, RayHits
+
+__all__ = [
+    "OBJECT_GROUP",
+    "PARTICLE_GROUP",
+    "STATIC_GROUP",
+    "ContactReport",
+    "FootprintHits",
+    "ParticlePool",
+    "PhysicsWorld",
+    "RayHits",
+]

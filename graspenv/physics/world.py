@@ -1,0 +1,834 @@
+"""The PyBullet scene: table, objects, particle pool and the per-frame control step.
+
+:class:`PhysicsWorld` owns one PyBullet DIRECT client and is the only door to it:
+numpy arrays in, numpy arrays out, object names instead of Bullet ids, particle ids
+from :class:`~graspenv.physics.pool.ParticlePool`.
+
+World frame: origin at the table centre, x right, y away from the viewer, z up from
+the table top; SI units (m, kg, s, N, rad); quaternions are (x, y, z, w).
+
+Settings applied (from ``scene.physics`` unless stated), and why:
+
+- time step ``1 / (surface.fps · physics.substeps)``, sub-stepped in Python: the
+  particle force is recomputed before every ``stepSimulation``. Bullet's own
+  ``numSubSteps`` would reapply the first sub-step's force on every internal step.
+- ``deterministicOverlappingPairs``: Bullet sorts its broadphase pairs, so the
+  solver order, and with it every bit of the result, depends only on the commands.
+- ``numSolverIterations`` from ``physics.solver_iterations``; ``allowedCcdPenetration``
+  from ``physics.allowed_ccd_penetration`` (at Bullet's default a fast 4 mm sphere
+  tunnels through a thin wall even with CCD); ``contactBreakingThreshold`` from
+  ``physics.contact_breaking_threshold`` (the 0.02 m default inflates every bounding
+  box and slows ray casts five-fold).
+- Linear and angular damping are zero for every body: air drag is negligible here
+  and damping would bias slide distances.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import math
+import time
+from dataclasses import dataclass
+from types import TracebackType
+
+import numpy as np
+import pybullet as pb
+from numpy.typing import ArrayLike, NDArray
+
+from graspenv.config import ObjectConfig, SceneConfig
+from graspenv.physics.pool import (
+    OBJECT_GROUP,
+    PARTICLE_GROUP,
+    STATIC_GROUP,
+    ParticlePool,
+)
+from graspenv.physics.rigid import RigidBodies
+
+__all__ = ["ContactReport", "FootprintHits", "PhysicsWorld", "RayHits"]
+
+#: Thickness of the table slab under z = 0, metres.
+TABLE_THICKNESS = 0.05
+#: Height of the floor's top below the table top, metres (a table is about this high).
+FLOOR_DEPTH = 0.75
+_FLOOR_HALF_SIZE = 2.0
+_RAY_BATCH = 8192
+# Rays start this far above the highest point any object could reach while resting.
+_RAY_CLEARANCE = 0.5
+# Points on the rim of a cylinder's end discs used to draw its footprint.
+_CYLINDER_RIM_POINTS = 32
+
+# A bottom particle may sit this far above its support before it is pulled down
+# (Bullet's resting contacts sink about 0.01-0.03 mm, never rise).
+_REST_TOLERANCE = 2e-4
+_OBJECT_MASK = OBJECT_GROUP | STATIC_GROUP | PARTICLE_GROUP
+_STATIC_MASK = OBJECT_GROUP | PARTICLE_GROUP
+_IDENTITY = (0.0, 0.0, 0.0, 1.0)
+_ZERO = (0.0, 0.0, 0.0)
+# Where reset() moves objects (1 m apart) for one step so that all contacts drop.
+_AWAY = 500.0
+
+
+@dataclass(frozen=True)
+class RayHits:
+    """What vertical rays cast from above met first (particles are transparent).
+
+    Attributes:
+        height: z of the top surface under each point, metres; 0 on the bare table
+            (and off its edge), shape (N,).
+        object: index into ``PhysicsWorld.object_names`` of the object hit, -1 for
+            the table, shape (N,).
+    """
+
+    height: NDArray[np.float64]
+    object: NDArray[np.int64]
+
+
+@dataclass(frozen=True)
+class FootprintHits:
+    """Which object's footprint (its shadow on the table) each point lies inside.
+
+    Attributes:
+        object: index of the object whose footprint holds the point deepest, -1 when
+            no footprint holds it by more than the margin, shape (N,).
+        depth: distance from the point in to the nearest footprint edge of that
+            object, metres; -inf where ``object`` is -1, shape (N,).
+        top: height of the top surface under the point (ray cast), metres; where
+            ``object`` is -1 the height of whatever is there, shape (N,).
+    """
+
+    object: NDArray[np.int64]
+    depth: NDArray[np.float64]
+    top: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class ContactReport:
+    """Contacts of one object after the last physics sub-step.
+
+    One row per contact point; forces are those Bullet applied in the last sub-step.
+
+    Attributes:
+        particle: id of the particle in each contact, -1 when the other body is not a
+            particle, shape (K,).
+        other_object: index of the other object, -1 when it is a particle, the table
+            or the floor, shape (K,).
+        position: contact point on the object's surface, metres, world frame, (K, 3).
+        normal: unit contact normal pointing into the object (the direction the
+            contact pushes it), world frame, shape (K, 3).
+        normal_force: normal force on the object, newtons, >= 0, shape (K,).
+        friction: friction force on the object, newtons, world frame, shape (K, 3).
+        distance: signed separation, metres (negative: penetration), shape (K,).
+    """
+
+    particle: NDArray[np.int64]
+    other_object: NDArray[np.int64]
+    position: NDArray[np.float64]
+    normal: NDArray[np.float64]
+    normal_force: NDArray[np.float64]
+    friction: NDArray[np.float64]
+    distance: NDArray[np.float64]
+
+    @property
+    def force(self) -> NDArray[np.float64]:
+        """Total contact force on the object at each contact, newtons, shape (K, 3)."""
+        return self.normal_force[:, None] * self.normal + self.friction
+
+    def particle_normal_forces(self) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """Normal force on the object summed per particle.
+
+        Returns:
+            (ids, force): particle ids in increasing order, shape (P,), and the summed
+            normal force each pushes on the object with, newtons, shape (P,).
+        """
+        mask = self.particle >= 0
+        ids, inverse = np.unique(self.particle[mask], return_inverse=True)
+        force = np.zeros(ids.size)
+        np.add.at(force, inverse, self.normal_force[mask])
+        return ids.astype(np.int64), force
+
+
+class PhysicsWorld:
+    """A table, its objects and a pool of particle proxies in a PyBullet DIRECT client.
+
+    Args:
+        scene: the scene configuration; ``surface`` sets the table size and the frame
+            rate, ``objects`` the objects, ``proxy`` the particles and ``physics`` the
+            Bullet settings.
+
+    Attributes:
+        scene: the configuration it was built from.
+        pool: the particle bodies; ids from it go to :meth:`step_frame`.
+        frame_dt: seconds per camera frame, ``1 / surface.fps``.
+        substeps: physics steps per frame.
+        substep_dt: seconds per physics step.
+        control_dt: Δt of the particle control law, seconds (``physics.control_time``,
+            or the sub-step if that is longer).
+
+    Example:
+        >>> with PhysicsWorld(SceneConfig()) as world:  # doctest: +SKIP
+        ...     ids = world.pool.acquire(2)
+        ...     world.pool.place(ids, [[0.05, 0.0, 0.002], [0.06, 0.0, 0.002]])
+        ...     world.step_frame(ids, [[0.04, 0.0], [0.05, 0.0]])
+    """
+
+    def __init__(self, scene: SceneConfig) -> None:
+        self.scene = scene
+        self.frame_dt = 1.0 / scene.surface.fps
+        self.substeps = scene.physics.substeps
+        self.substep_dt = self.frame_dt / self.substeps
+        # Below the sub-step the control law would be unstable.
+        self.control_dt = max(scene.physics.control_time, self.substep_dt)
+        ring = 0.9 * scene.proxy.particle_radius
+        self._disc_offsets = np.array(
+            [
+                [0.0, 0.0, 0.0],
+                [ring, 0.0, 0.0],
+                [-ring, 0.0, 0.0],
+                [0.0, ring, 0.0],
+                [0.0, -ring, 0.0],
+            ]
+        )
+        self._client: int | None = pb.connect(pb.DIRECT)
+        self._object_bodies: list[int] = []
+        self._body_to_object: dict[int, int] = {}
+        self._table = -1
+        self._floor = -1
+        self._build_scene()
+        self.pool = ParticlePool(self.client, scene.proxy, scene.physics)
+        self.rigid_proxies = RigidBodies(self.client, scene.proxy, scene.physics)
+        self.bullet_seconds = 0.0
+        """Wall seconds spent inside Bullet's ``stepSimulation`` by the last frame."""
+
+    # -- lifetime --------------------------------------------------------------------
+
+    @property
+    def client(self) -> int:
+        """The PyBullet client id (for code inside ``graspenv.physics``)."""
+        if self._client is None:
+            raise RuntimeError("this PhysicsWorld is closed")
+        return self._client
+
+    def close(self) -> None:
+        """Disconnect the PyBullet client; calling it again does nothing."""
+        if self._client is not None:
+            pb.disconnect(physicsClientId=self._client)
+            self._client = None
+
+    def __enter__(self) -> PhysicsWorld:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        traceback: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        # A forgotten world must not keep its client (and its memory) alive; at
+        # interpreter exit pybullet may already be gone, which is fine.
+        if getattr(self, "_client", None) is not None:
+            with contextlib.suppress(Exception):
+                self.close()
+
+    def reset(self) -> None:
+        """Restore the initial scene: objects back in place at rest, particles parked.
+
+        No body is created or destroyed; the pool keeps its size and hands out the
+        same ids again. The results after a reset are bit-identical to a fresh
+        world's: objects are first moved apart and stepped once, which drops every
+        contact manifold and broadphase pair (and Bullet's warm-start impulses with
+        them), then put back. Body ids are unchanged, so the sorted pairs
+        (``deterministicOverlappingPairs``) and the solver order are a fresh world's,
+        and parked particles are asleep and collide with nothing.
+        """
+        client = self.client
+        self.pool.release_all()
+        self.rigid_proxies.clear()
+        for i, body in enumerate(self._object_bodies):
+            pb.resetBasePositionAndOrientation(body, (_AWAY + i, _AWAY, _AWAY), _IDENTITY, client)
+            pb.resetBaseVelocity(body, _ZERO, _ZERO, client)
+        pb.stepSimulation(client)
+        self.pool.physics_steps += 1
+        for config, body in zip(self.scene.objects, self._object_bodies, strict=True):
+            position, orientation = _initial_pose(config)
+            pb.resetBasePositionAndOrientation(body, position, orientation, client)
+            pb.resetBaseVelocity(body, _ZERO, _ZERO, client)
+
+    @property
+    def num_bodies(self) -> int:
+        """Number of Bullet bodies (table, floor, objects, pooled particles)."""
+        return int(pb.getNumBodies(physicsClientId=self.client))
+
+    # -- objects ---------------------------------------------------------------------
+
+    @property
+    def object_names(self) -> tuple[str, ...]:
+        """Names of the objects, in ``scene.objects`` order (their indices)."""
+        return tuple(o.name for o in self.scene.objects)
+
+    def object_index(self, name: str) -> int:
+        """Index of an object in :attr:`object_names`.
+
+        Raises:
+            KeyError: no object has that name.
+        """
+        try:
+            return self.object_names.index(name)
+        except ValueError:
+            raise KeyError(
+                f"no object named {name!r}; objects are {list(self.object_names)}"
+            ) from None
+
+    def object_pose(self, name: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Pose of an object.
+
+        Returns:
+            (position, quaternion): centre of mass, metres, world frame, shape (3,);
+            orientation as (x, y, z, w), shape (4,).
+        """
+        body = self._object_bodies[self.object_index(name)]
+        position, orientation = pb.getBasePositionAndOrientation(body, physicsClientId=self.client)
+        return np.array(position), np.array(orientation)
+
+    def object_velocity(self, name: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Velocity of an object.
+
+        Returns:
+            (linear, angular): m/s and rad/s, world frame, shapes (3,) and (3,).
+        """
+        body = self._object_bodies[self.object_index(name)]
+        linear, angular = pb.getBaseVelocity(body, physicsClientId=self.client)
+        return np.array(linear), np.array(angular)
+
+    # -- queries ---------------------------------------------------------------------
+
+    def ray_heights(self, xy: ArrayLike) -> RayHits:
+        """Cast vertical rays from above onto the table and whatever lies on it.
+
+        Particles are transparent to these rays, so a new particle can be put on the
+        object (or table) under its contour point: at z = height + particle radius.
+
+        Args:
+            xy: points, metres, world frame, shape (N, 2).
+
+        Returns:
+            Heights of the first surface hit and the object hit (-1: table).
+        """
+        points = np.asarray(xy, dtype=float).reshape(-1, 2)
+        n = points.shape[0]
+        height = np.zeros(n)
+        hit_object = np.full(n, -1, dtype=np.int64)
+        if n == 0:
+            return RayHits(height, hit_object)
+        top = self._ray_top()
+        starts = np.column_stack([points, np.full(n, top)])
+        # Ending just under the table top keeps rays short (fewer broadphase visits).
+        ends = np.column_stack([points, np.full(n, -1e-3)])
+        for lo in range(0, n, _RAY_BATCH):
+            hits = pb.rayTestBatch(
+                starts[lo : lo + _RAY_BATCH].tolist(),
+                ends[lo : lo + _RAY_BATCH].tolist(),
+                collisionFilterMask=OBJECT_GROUP | STATIC_GROUP,
+                physicsClientId=self.client,
+            )
+            for i, hit in enumerate(hits, start=lo):
+                body = hit[0]
+                if body < 0 or body == self._table:
+                    continue
+                height[i] = hit[3][2]
+                hit_object[i] = self._body_to_object.get(body, -1)
+        return RayHits(height, hit_object)
+
+    def object_footprint(self, xy: ArrayLike, margin: float = 0.0) -> FootprintHits:
+        """Find points that lie inside an object's footprint by more than a margin.
+
+        The penetration limit (DESIGN step 7) uses this: a contact point deep inside
+        an object's footprint goes on the object's top face, not against its side.
+        Footprints follow the objects' current poses (a tipped box or a lying
+        cylinder has the shadow it casts now).
+
+        Args:
+            xy: points, metres, world frame, shape (N, 2).
+            margin: how far inside the footprint edge a point must be, metres.
+
+        Returns:
+            Object index, depth inside its footprint and the top height per point.
+        """
+        points = np.asarray(xy, dtype=float).reshape(-1, 2)
+        n = points.shape[0]
+        best = np.full(n, -np.inf)
+        owner = np.full(n, -1, dtype=np.int64)
+        for index, config in enumerate(self.scene.objects):
+            depth = self._footprint_depth(index, config, points)
+            better = (depth > margin) & (depth > best)
+            best[better] = depth[better]
+            owner[better] = index
+        top = self.ray_heights(points).height
+        return FootprintHits(owner, best, top)
+
+    def contact_report(self, name: str) -> ContactReport:
+        """Contacts on an object from the last physics sub-step.
+
+        Args:
+            name: object name.
+
+        Returns:
+            Contact points, normals (into the object) and forces, with which particle
+            or object each contact is with.
+        """
+        body = self._object_bodies[self.object_index(name)]
+        points = pb.getContactPoints(bodyA=body, physicsClientId=self.client)
+        k = len(points)
+        particle = np.full(k, -1, dtype=np.int64)
+        other = np.full(k, -1, dtype=np.int64)
+        position = np.zeros((k, 3))
+        normal = np.zeros((k, 3))
+        normal_force = np.zeros(k)
+        friction = np.zeros((k, 3))
+        distance = np.zeros(k)
+        for i, cp in enumerate(points):
+            body_b = cp[2]
+            particle[i] = self.pool.particle_of_body(body_b)
+            other[i] = self._body_to_object.get(body_b, -1)
+            position[i] = cp[5]
+            # Bullet's normal is on B pointing towards A (the object): into it.
+            normal[i] = cp[7]
+            normal_force[i] = cp[9]
+            friction[i] = cp[10] * np.asarray(cp[11]) + cp[12] * np.asarray(cp[13])
+            distance[i] = cp[8]
+        return ContactReport(particle, other, position, normal, normal_force, friction, distance)
+
+    # -- control ---------------------------------------------------------------------
+
+    def step_frame(
+        self,
+        particles: ArrayLike,
+        targets: ArrayLike,
+        spin: ArrayLike | float = 0.0,
+        dt: float | None = None,
+    ) -> NDArray[np.float64]:
+        """Advance one camera frame, driving every particle stack to its contour point.
+
+        For each Python sub-step s = 1..S of the frame, each particle's planar target
+        moves along the straight line from its last frame's target to this frame's
+        (``x*_s``, at constant velocity ``u``), and the particle is driven by
+        Wilson's law, with the target's velocity fed forward::
+
+            v* = (x*_s − x) / Δt + (1 − h/Δt) u   (|v*| ≤ physics.max_particle_speed)
+            F  = m (v* − v) / Δt                  (|F| ≤ physics.max_particle_force)
+
+        in the table plane, with h the sub-step and Δt = ``physics.control_time``
+        (or h if longer). At Δt = h this is the paper's law; for Δt > h the feed
+        forward keeps a free particle on a moving target instead of lagging by u·Δt.
+        A particle held off its point by a depth d (inside an object) pushes with
+        about m·d/Δt² (576 N/m at the defaults: squeezing deeper grips harder). A
+        bottom particle sliding on the table stays short of its point by its table
+        friction over that stiffness (about 0.09 mm at the defaults).
+
+        In z, a bottom particle is pressed down by ``proxy.down_force`` (its weight is
+        cancelled, so the press does not depend on its mass) and, if it rises above
+        the surface under it (rays once per frame), pulled back by the same law. A
+        particle in layer l > 0 of a stack is driven the same way to
+        ``proxy.stack_spacing · l`` above its bottom particle. A bottom particle's
+        friction acts only in the table plane, an upper one's in every direction
+        (see :meth:`ParticlePool.set_upper`).
+
+        Particles have infinite rotational inertia, so no contact can change their
+        angular velocity: it is set here to ``spin`` about z. A rigid fingertip's
+        surface turns with the finger; a sphere that does not turn drags a squeezed
+        object's face along with its centre, one radius further out than the face,
+        and overdrives a turn by radius / lever arm (about 6 % for 2 mm particles on a
+        6 cm box). Pass the rotation rate of each contour (e.g. the hand's estimated
+        rotation) to remove that error.
+
+        Every active particle should be in ``particles`` every frame: one left out
+        keeps its last velocity and target, and its next frame starts from there.
+
+        Args:
+            particles: particle ids, shape (K,) for single particles, or (K, L) for
+                stacks of L particles per contour point, column 0 at the bottom.
+            targets: contour points at the end of this frame, metres, world frame
+                (x, y), shape (K, 2).
+            spin: angular velocity about +z of the contour at each point, rad/s,
+                shape (K,) or a scalar for all.
+            dt: frame duration, seconds; defaults to ``1 / surface.fps``.
+
+        Returns:
+            Particle positions at the end of the frame, metres, world frame, shape
+            ``particles.shape + (3,)``.
+        """
+        ids = np.asarray(particles, dtype=np.int64)
+        if ids.ndim == 1:
+            ids = ids[:, None]
+        if ids.ndim != 2:
+            raise ValueError(f"particles must have shape (K,) or (K, L), got {ids.shape}")
+        k, layers = ids.shape
+        goal_xy = np.asarray(targets, dtype=float)
+        if goal_xy.shape != (k, 2):
+            raise ValueError(f"targets must have shape ({k}, 2), got {goal_xy.shape}")
+        spin_z = np.broadcast_to(np.asarray(spin, dtype=float), (k,))
+        frame_dt = self.frame_dt if dt is None else float(dt)
+        substeps = self.substeps
+        h = frame_dt / substeps
+        client = self.client
+        if h != self.substep_dt:
+            pb.setTimeStep(h, physicsClientId=client)
+        flat = ids.reshape(-1)
+        if not np.all(self.pool.is_active(flat)):
+            raise ValueError(
+                f"step_frame got parked or unknown particles: {flat[~self.pool.is_active(flat)]}"
+            )
+        if flat.size == 0:
+            bullet = 0.0
+            for _ in range(substeps):
+                tic = time.perf_counter()
+                pb.stepSimulation(physicsClientId=client)
+                bullet += time.perf_counter() - tic
+                self.pool.physics_steps += 1
+            self._restore_time_step(h)
+            self.bullet_seconds = bullet
+            return np.zeros((*np.shape(particles), 3))
+
+        proxy, physics = self.scene.proxy, self.scene.physics
+        mass = proxy.particle_mass
+        tau = max(physics.control_time, h)
+        v_max = physics.max_particle_speed
+        dv_max = physics.max_particle_force * h / mass
+        goal = np.repeat(goal_xy, layers, axis=0)
+        start = self.pool.last_targets(flat)
+        step_xy = goal - start
+        # With Δt equal to the sub-step the position term alone lands on the moving
+        # target (the paper's law); with a longer Δt it would lag by u·Δt, so the
+        # target's velocity is fed forward by the share the position term misses.
+        feed_forward = (1.0 - h / tau) * step_xy / frame_dt
+        is_upper = np.tile(np.arange(layers) > 0, k)
+        rise = np.tile(np.arange(layers) * proxy.stack_spacing, k)[is_upper]
+        bottom_row = np.repeat(np.arange(k) * layers, layers)[is_upper]
+        angular = [(0.0, 0.0, w) for w in np.repeat(spin_z, layers).tolist()]
+        # Bullet adds g·h itself; the weight is cancelled and the press applied here.
+        press_dv = (physics.gravity - proxy.down_force / mass) * h
+        gain = h / tau
+
+        self.pool.set_upper(flat, is_upper)
+        bodies = self.pool.body_ids(flat).tolist()
+        n = len(bodies)
+        get_position = pb.getBasePositionAndOrientation
+        set_velocity = pb.resetBaseVelocity
+        step = pb.stepSimulation
+        bullet = 0.0
+        chain = itertools.chain.from_iterable
+
+        def read_positions() -> NDArray[np.float64]:
+            # Positional arguments and fromiter: this is the hot loop.
+            rows = [get_position(b, client)[0] for b in bodies]
+            return np.fromiter(chain(rows), float, 3 * n).reshape(n, 3)
+
+        # Velocities: Bullet moves a body by h·v after its solve (pybullet splits
+        # impulses only past 4 cm of penetration), so a particle's velocity is its
+        # last displacement over h, exact to rounding; only the first sub-step
+        # needs last frame's, which the pool keeps. One Bullet call per particle
+        # fewer, a quarter of the loop.
+        v, known = self.pool.cached_velocities(flat)
+        for i in np.flatnonzero(~known).tolist():
+            v[i] = pb.getBaseVelocity(bodies[i], client)[0]
+        is_bottom = ~is_upper
+        rest_z = np.zeros(0)  # set from the first sub-step's positions
+        x = read_positions()
+        for s in range(1, substeps + 1):
+            if s == 1:
+                # Where each bottom particle should rest: on the surface under it
+                # (rays from the particle down ignore whatever is above it). One at
+                # table level cannot be above its support and needs no ray.
+                bottom_z = x[is_bottom, 2]
+                rest_z = np.full(bottom_z.shape, self.pool.radius)
+                raised = bottom_z > self.pool.radius + _REST_TOLERANCE
+                if np.any(raised):
+                    rest_z[raised] += self._support_heights(x[is_bottom][raised])
+            target = start + (s / substeps) * step_xy
+            v_star = feed_forward + (target - x[:, :2]) / tau
+            speed = np.hypot(v_star[:, 0], v_star[:, 1])
+            too_fast = speed > v_max
+            if np.any(too_fast):
+                v_star[too_fast] *= (v_max / speed[too_fast])[:, None]
+            dv = gain * (v_star - v[:, :2])
+            magnitude = np.hypot(dv[:, 0], dv[:, 1])
+            too_strong = magnitude > dv_max
+            if np.any(too_strong):
+                dv[too_strong] *= (dv_max / magnitude[too_strong])[:, None]
+            new_v = v.copy()
+            new_v[:, :2] += dv
+            new_v[:, 2] += press_dv
+            # Friction cannot hold a bottom particle down (it is planar), and a
+            # squeezed face tilted by a degree pushes it up harder than the press:
+            # a bottom particle that rose above its support is pulled back by the
+            # same law, so it cannot be squirted up a face or wedged under an edge.
+            excess = x[is_bottom, 2] - rest_z - _REST_TOLERANCE
+            if np.any(excess > 0):
+                vz = v[is_bottom, 2]
+                pull = np.clip(gain * (-np.maximum(excess, 0.0) / tau - vz), -dv_max, 0.0)
+                new_v[is_bottom, 2] += np.where(excess > 0, pull, 0.0)
+            if layers > 1:
+                z_goal = x[bottom_row, 2] + rise
+                upper_z, upper_vz = x[is_upper, 2], v[is_upper, 2]
+                vz_star = np.clip((z_goal - upper_z) / tau, -v_max, v_max)
+                lift = np.clip(gain * (vz_star - upper_vz), -dv_max, dv_max)
+                new_v[is_upper, 2] = upper_vz + physics.gravity * h + lift
+            for body, lin, ang in zip(bodies, new_v.tolist(), angular, strict=True):
+                set_velocity(body, lin, ang, client)
+            tic = time.perf_counter()
+            step(client)
+            bullet += time.perf_counter() - tic
+            self.pool.physics_steps += 1
+            moved = read_positions()
+            v = (moved - x) / h
+            x = moved
+        self.pool.record_velocities(flat, v)
+        self.pool.set_last_targets(flat, goal)
+        self._restore_time_step(h)
+        self.bullet_seconds = bullet
+        return x.reshape(*np.shape(particles), 3)
+
+    def step_bodies(self, handles: ArrayLike, goals: ArrayLike, dt: float | None = None) -> None:
+        """Advance one camera frame, driving rigid proxy bodies to their goal poses.
+
+        Args:
+            handles: bodies from :attr:`rigid_proxies`, shape (B,).
+            goals: (x, y, yaw) at the end of the frame, metres and radians, world
+                frame, shape (B, 3).
+            dt: frame duration, seconds; defaults to ``1 / surface.fps``.
+        """
+        frame_dt = self.frame_dt if dt is None else float(dt)
+        h = frame_dt / self.substeps
+        client = self.client
+        if h != self.substep_dt:
+            pb.setTimeStep(h, physicsClientId=client)
+        tau = max(self.scene.physics.control_time, h)
+        bullet = 0.0
+        for _ in range(self.substeps):
+            self.rigid_proxies.drive(handles, goals, h, tau)
+            tic = time.perf_counter()
+            pb.stepSimulation(physicsClientId=client)
+            bullet += time.perf_counter() - tic
+            self.pool.physics_steps += 1
+        self._restore_time_step(h)
+        self.bullet_seconds = bullet
+
+    def _support_heights(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Height of the highest surface below each particle's disc (0: table), (n,).
+
+        Rays go down from the centre and from four points 0.9 radius around it, so
+        a particle whose centre has just passed an edge still counts as resting on
+        it (pulling it down there would drive it into the edge and kick the object).
+        """
+        n = points.shape[0]
+        if n == 0:
+            return np.zeros(0)
+        starts = (points[:, None, :] + self._disc_offsets[None, :, :]).reshape(-1, 3)
+        ends = starts.copy()
+        ends[:, 2] = -1e-3
+        height = np.zeros(starts.shape[0])
+        for lo in range(0, starts.shape[0], _RAY_BATCH):
+            hits = pb.rayTestBatch(
+                starts[lo : lo + _RAY_BATCH].tolist(),
+                ends[lo : lo + _RAY_BATCH].tolist(),
+                collisionFilterMask=OBJECT_GROUP | STATIC_GROUP,
+                physicsClientId=self.client,
+            )
+            for i, hit in enumerate(hits, start=lo):
+                if hit[0] >= 0 and hit[0] != self._table:
+                    height[i] = hit[3][2]
+        return height.reshape(n, -1).max(axis=1)
+
+    # -- building --------------------------------------------------------------------
+
+    def _restore_time_step(self, h: float) -> None:
+        if h != self.substep_dt:
+            pb.setTimeStep(self.substep_dt, physicsClientId=self.client)
+
+    def _build_scene(self) -> None:
+        client = self.client
+        physics = self.scene.physics
+        pb.setGravity(0.0, 0.0, -physics.gravity, physicsClientId=client)
+        pb.setTimeStep(self.substep_dt, physicsClientId=client)
+        pb.setPhysicsEngineParameter(
+            numSubSteps=0,
+            numSolverIterations=physics.solver_iterations,
+            deterministicOverlappingPairs=1,
+            allowedCcdPenetration=physics.allowed_ccd_penetration,
+            contactBreakingThreshold=physics.contact_breaking_threshold,
+            physicsClientId=client,
+        )
+        width, depth = self.scene.surface.size
+        self._table = self._static_box(
+            (width / 2, depth / 2, TABLE_THICKNESS / 2),
+            (0.0, 0.0, -TABLE_THICKNESS / 2),
+            physics.table_friction,
+        )
+        # The floor only catches objects pushed off the table, so they come to rest
+        # instead of falling (and speeding up) forever.
+        self._floor = self._static_box(
+            (_FLOOR_HALF_SIZE, _FLOOR_HALF_SIZE, TABLE_THICKNESS / 2),
+            (0.0, 0.0, -FLOOR_DEPTH - TABLE_THICKNESS / 2),
+            physics.table_friction,
+        )
+        self._object_bodies = [self._create_object(o) for o in self.scene.objects]
+        self._body_to_object = {b: i for i, b in enumerate(self._object_bodies)}
+
+    def _static_box(
+        self,
+        half_extents: tuple[float, float, float],
+        position: tuple[float, float, float],
+        friction: float,
+    ) -> int:
+        client = self.client
+        shape = pb.createCollisionShape(
+            pb.GEOM_BOX, halfExtents=half_extents, physicsClientId=client
+        )
+        body = int(
+            pb.createMultiBody(
+                baseMass=0.0,
+                baseCollisionShapeIndex=shape,
+                baseVisualShapeIndex=-1,
+                basePosition=position,
+                useMaximalCoordinates=True,
+                physicsClientId=client,
+            )
+        )
+        pb.changeDynamics(
+            body,
+            -1,
+            lateralFriction=friction,
+            rollingFriction=0.0,
+            spinningFriction=0.0,
+            restitution=0.0,
+            physicsClientId=client,
+        )
+        pb.setCollisionFilterGroupMask(body, -1, STATIC_GROUP, _STATIC_MASK, physicsClientId=client)
+        return body
+
+    def _create_object(self, config: ObjectConfig) -> int:
+        client = self.client
+        if config.shape == "box":
+            shape = pb.createCollisionShape(
+                pb.GEOM_BOX,
+                halfExtents=[s / 2 for s in config.size],
+                physicsClientId=client,
+            )
+        elif config.shape == "sphere":
+            shape = pb.createCollisionShape(
+                pb.GEOM_SPHERE, radius=config.size[0], physicsClientId=client
+            )
+        else:
+            # Bullet's cylinder axis is the body's z axis: the cylinder stands upright.
+            shape = pb.createCollisionShape(
+                pb.GEOM_CYLINDER,
+                radius=config.size[0],
+                height=config.size[1],
+                physicsClientId=client,
+            )
+        position, orientation = _initial_pose(config)
+        body = int(
+            pb.createMultiBody(
+                baseMass=config.mass,
+                baseCollisionShapeIndex=shape,
+                baseVisualShapeIndex=-1,
+                basePosition=position,
+                baseOrientation=orientation,
+                useMaximalCoordinates=True,
+                physicsClientId=client,
+            )
+        )
+        pb.changeDynamics(
+            body,
+            -1,
+            lateralFriction=config.friction,
+            rollingFriction=config.rolling_friction,
+            spinningFriction=config.spinning_friction,
+            restitution=config.restitution,
+            linearDamping=0.0,
+            angularDamping=0.0,
+            # An object asleep under a still hand would ignore weak pushes; objects
+            # are few, keeping them awake is cheap.
+            activationState=pb.ACTIVATION_STATE_DISABLE_SLEEPING,
+            physicsClientId=client,
+        )
+        pb.setCollisionFilterGroupMask(body, -1, OBJECT_GROUP, _OBJECT_MASK, physicsClientId=client)
+        return body
+
+    def _ray_top(self) -> float:
+        tops = [0.0]
+        for body in self._object_bodies:
+            _, high = pb.getAABB(body, physicsClientId=self.client)
+            tops.append(high[2])
+        return max(tops) + _RAY_CLEARANCE
+
+    def _footprint_depth(
+        self, index: int, config: ObjectConfig, points: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        body = self._object_bodies[index]
+        position, orientation = pb.getBasePositionAndOrientation(body, physicsClientId=self.client)
+        centre = np.array(position)
+        if config.shape == "sphere":
+            return config.size[0] - np.hypot(*(points - centre[:2]).T)
+        rotation = np.array(pb.getMatrixFromQuaternion(orientation)).reshape(3, 3)
+        if config.shape == "box":
+            half = np.array(config.size) / 2
+            signs = np.array(
+                [[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float
+            )
+            local = signs * half
+        else:
+            radius, height = config.size
+            angle = np.linspace(0.0, 2 * math.pi, _CYLINDER_RIM_POINTS, endpoint=False)
+            rim = np.column_stack([radius * np.cos(angle), radius * np.sin(angle)])
+            local = np.concatenate(
+                [
+                    np.column_stack([rim, np.full(len(rim), -height / 2)]),
+                    np.column_stack([rim, np.full(len(rim), height / 2)]),
+                ]
+            )
+        corners = centre[:2] + (local @ rotation.T)[:, :2]
+        return _convex_depth(_convex_hull(corners), points)
+
+
+def _initial_pose(config: ObjectConfig) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Resting pose of an object: centre (x, y, height / 2) metres, quaternion (x, y, z, w)."""
+    x, y = config.position
+    orientation = pb.getQuaternionFromEuler((0.0, 0.0, config.yaw))
+    return (x, y, config.height / 2), tuple(orientation)
+
+
+def _convex_hull(points: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Counter-clockwise convex hull of 2D points (Andrew's monotone chain), (M, 2)."""
+    order = np.lexsort((points[:, 1], points[:, 0]))
+    pts = points[order].tolist()
+
+    def half(seq: list[list[float]]) -> list[list[float]]:
+        chain: list[list[float]] = []
+        for p in seq:
+            while len(chain) >= 2:
+                (ax, ay), (bx, by) = chain[-2], chain[-1]
+                if (bx - ax) * (p[1] - ay) - (by - ay) * (p[0] - ax) > 1e-15:
+                    break
+                chain.pop()
+            chain.append(p)
+        return chain
+
+    lower = half(pts)
+    upper = half(pts[::-1])
+    return np.array(lower[:-1] + upper[:-1], dtype=float)
+
+
+def _convex_depth(polygon: NDArray[np.float64], points: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Distance inside a counter-clockwise convex polygon (negative outside), (N,)."""
+    if polygon.shape[0] < 3:
+        return np.full(points.shape[0], -np.inf)
+    edges = np.roll(polygon, -1, axis=0) - polygon
+    lengths = np.hypot(edges[:, 0], edges[:, 1])
+    inward = np.column_stack([-edges[:, 1], edges[:, 0]]) / lengths[:, None]
+    # Distance from each edge line towards the inside; the smallest is the depth.
+    offsets = (points[:, None, :] - polygon[None, :, :]) * inward[None, :, :]
+    return np.min(offsets.sum(axis=2), axis=1)

@@ -1,0 +1,76 @@
+"""What every proxy method shares: the per-frame command it hands the physics."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from graspenv.contacts.tracking import ContactFrame
+
+__all__ = ["ProxyCommand", "ProxyMethod", "rigid_rotation"]
+
+
+@dataclass(frozen=True)
+class ProxyCommand:
+    """Where the proxies of one frame must go.
+
+    Attributes:
+        particles: pool ids, shape (K, L): K contour points, L particles stacked on
+            each (column 0 at the bottom).
+        targets: each point's position at the end of the frame, metres, world frame,
+            shape (K, 2).
+        spin: rotation rate about +z of the contour each point belongs to, rad/s,
+            shape (K,).
+        bodies: for the rigid method, one handle per contact, shape (B,).
+        body_targets: (x, y, yaw) of each rigid body at the end of the frame, metres
+            and radians, world frame, shape (B, 3).
+    """
+
+    particles: NDArray[np.int64]
+    targets: NDArray[np.float64]
+    spin: NDArray[np.float64]
+    bodies: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))
+    body_targets: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
+
+    @property
+    def n_particles(self) -> int:
+        return int(self.particles.size)
+
+
+class ProxyMethod(Protocol):
+    """Turns tracked contacts into proxy targets, keeping its own bookkeeping."""
+
+    def update(self, frame: ContactFrame, mask: NDArray[np.uint8]) -> ProxyCommand:
+        """Bookkeeping for one camera frame; returns where the proxies must go."""
+        ...
+
+    def reset(self) -> None:
+        """Forget every contact (the physics pool is reset by the world)."""
+        ...
+
+
+def rigid_rotation(before: NDArray[np.float64], after: NDArray[np.float64]) -> float:
+    """The rotation angle of the best rigid motion taking points ``before`` to ``after``.
+
+    Least squares (2-D Kabsch): with both point sets centred, the angle is
+    ``atan2(Σ a × b, Σ a · b)``.
+
+    Args:
+        before: metres, world frame, shape (N, 2).
+        after: the same points later, shape (N, 2).
+
+    Returns:
+        radians, counter-clockwise; 0 for fewer than two points.
+    """
+    if len(before) < 2:
+        return 0.0
+    a = before - before.mean(axis=0)
+    b = after - after.mean(axis=0)
+    cross = float(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]))
+    dot = float(np.sum(a * b))
+    if cross == 0.0 and dot == 0.0:
+        return 0.0
+    return float(np.arctan2(cross, dot))

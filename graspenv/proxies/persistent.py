@@ -1,0 +1,208 @@
+"""Persistent particle proxies (Wilson, ITS 2009).
+
+Every contour point of every contact owns a particle (or a stack of them) that lives
+as long as the point can be followed from frame to frame, so a squeezing finger keeps
+pushing the same bodies into an object and friction builds up as it would under a
+real fingertip. One camera frame:
+
+1. *Lift-off.* Particles of removed contacts go back to the pool.
+2. *Hand rotation* (``proxy.track_hand_rotation``). The rotation of the best rigid
+   motion of all continuing contacts' centroids is the hand's turn this frame. A
+   round fingertip's own rotation cannot be seen in the mask; without this estimate
+   its points would counter-rotate against a turning object and roll on it.
+3. *Continuing contact.* The previous points are moved by the contact's centroid
+   displacement and, with the estimate on, turned about the centroid by the hand's
+   turn. The current contour is resampled starting from the predicted first point
+   (``proxy.predicted_resampling``), so points do not jitter along the contour and
+   pull against each other. The windowed sum-of-squared-distances match
+   (:func:`graspenv.contacts.matching.correspond`) then gives each current point its
+   predecessor, whose particle it reuses; current points without one get a new
+   particle put down beside the first neighbouring point that is not new; previous
+   points whose successor did not name them release theirs.
+4. *New contact.* One particle (stack) per contour point, put down by ray casting on
+   whatever is there (table or object top).
+5. *Penetration limit* (``proxy.penetration_limit``). A particle whose point lies
+   deeper than ``proxy.penetration_margin`` inside an object's footprint while the
+   particle is below the object's top is lifted onto the top face, instead of
+   pressing the side ever harder.
+
+With ``track_hand_rotation`` and ``predicted_resampling`` off this is the paper's
+plain form: the raw previous contour matched against the tracker's contour.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from graspenv.config import ContactConfig, ProxyConfig
+from graspenv.contacts.matching import correspond
+from graspenv.contacts.resample import resample_closed
+from graspenv.contacts.tracking import Contact, ContactFrame
+from graspenv.physics.world import PhysicsWorld
+from graspenv.proxies.base import ProxyCommand, rigid_rotation
+
+__all__ = ["PersistentProxies"]
+
+
+@dataclass
+class _Track:
+    """One contact's contour points and the particle stacks that follow them.
+
+    Attributes:
+        points: contour points of the last frame, metres, world frame, shape (N, 2).
+        particles: pool ids, shape (N, L), column 0 at the bottom.
+        centroid: the contact's centroid in the last frame, metres, shape (2,).
+    """
+
+    points: NDArray[np.float64]
+    particles: NDArray[np.int64]
+    centroid: NDArray[np.float64]
+
+
+def _rotate(points: NDArray[np.float64], angle: float) -> NDArray[np.float64]:
+    c, s = np.cos(angle), np.sin(angle)
+    return points @ np.array([[c, s], [-s, c]])
+
+
+class PersistentProxies:
+    """Contours to persistent particle stacks.
+
+    Args:
+        world: the physics world whose particle pool and ray casts are used.
+        proxy: particle and matching settings.
+        contacts: contour spacing (metres) for resampling continuing contours.
+        dt: seconds per camera frame (turns the hand's turn into a rotation rate).
+    """
+
+    def __init__(
+        self, world: PhysicsWorld, proxy: ProxyConfig, contacts: ContactConfig, dt: float
+    ) -> None:
+        self._world = world
+        self._proxy = proxy
+        self._spacing = contacts.spacing
+        self._dt = dt
+        self._layers = proxy.stack_layers
+        self._rise = proxy.stack_spacing * np.arange(self._layers)
+        self._tracks: dict[int, _Track] = {}
+        self.hand_turn = 0.0
+        """The hand's estimated turn in the last frame, radians."""
+
+    def reset(self) -> None:
+        self._tracks = {}
+        self.hand_turn = 0.0
+
+    def update(self, frame: ContactFrame, mask: NDArray[np.uint8]) -> ProxyCommand:
+        """Bookkeeping for one frame; ``mask`` is not needed by this method."""
+        del mask
+        pool = self._world.pool
+        for contact_id in frame.removed:
+            track = self._tracks.pop(contact_id, None)
+            if track is not None:
+                pool.release(track.particles.reshape(-1))
+
+        continuing = [c for c in frame.continuing if c.id in self._tracks]
+        turn = 0.0
+        if self._proxy.track_hand_rotation and len(continuing) >= 2:
+            before = np.array([self._tracks[c.id].centroid for c in continuing])
+            after = np.array([c.centroid for c in continuing])
+            turn = rigid_rotation(before, after)
+        self.hand_turn = turn
+
+        tracks: dict[int, _Track] = {}
+        spins: list[NDArray[np.float64]] = []
+        for contact in frame.contacts:
+            old = self._tracks.pop(contact.id, None)
+            if old is not None and contact.status == "continuing":
+                tracks[contact.id] = self._follow(old, contact, turn)
+                spins.append(np.full(len(tracks[contact.id].points), turn / self._dt))
+            else:
+                if old is not None:  # a reused id the tracker calls new: start afresh
+                    pool.release(old.particles.reshape(-1))
+                tracks[contact.id] = self._touch_down(contact)
+                spins.append(np.zeros(len(tracks[contact.id].points)))
+        for leftover in self._tracks.values():  # merged away without being listed
+            pool.release(leftover.particles.reshape(-1))
+        self._tracks = tracks
+
+        if not tracks:
+            empty = np.zeros((0, self._layers), np.int64)
+            return ProxyCommand(empty, np.zeros((0, 2)), np.zeros(0))
+        particles = np.concatenate([t.particles for t in tracks.values()])
+        targets = np.concatenate([t.points for t in tracks.values()])
+        if self._proxy.penetration_limit:
+            self._limit_penetration(particles, targets)
+        return ProxyCommand(particles, targets, np.concatenate(spins))
+
+    # -- stages ------------------------------------------------------------------------
+
+    def _follow(self, track: _Track, contact: Contact, turn: float) -> _Track:
+        proxy = self._proxy
+        if proxy.track_hand_rotation:
+            predicted = _rotate(track.points - track.centroid, turn) + contact.centroid
+        else:
+            predicted = track.points
+        if proxy.predicted_resampling:
+            current = resample_closed(contact.outline, self._spacing, start=predicted[0])
+        else:
+            current = contact.contour
+        match = correspond(predicted, current, proxy.window, proxy.matcher, proxy.search)
+
+        pool = self._world.pool
+        pool.release(track.particles[~match.kept].reshape(-1))
+        particles = np.empty((len(current), self._layers), np.int64)
+        reused = match.predecessor >= 0
+        particles[reused] = track.particles[match.predecessor[reused]]
+        fresh = np.flatnonzero(~reused)
+        if fresh.size:
+            ids = pool.acquire(fresh.size * self._layers).reshape(fresh.size, self._layers)
+            anchors = match.anchor[fresh]
+            if np.all(anchors >= 0):
+                beside = particles[anchors].reshape(-1)
+                pool.place(ids.reshape(-1), pool.positions(beside))
+            else:  # nothing was kept: put the whole contour down afresh
+                self._put_down(ids, current[fresh])
+            particles[fresh] = ids
+        return _Track(current, particles, contact.centroid.copy())
+
+    def _touch_down(self, contact: Contact) -> _Track:
+        points = np.array(contact.contour)
+        ids = self._world.pool.acquire(len(points) * self._layers).reshape(len(points), -1)
+        self._put_down(ids, points)
+        return _Track(points, ids, contact.centroid.copy())
+
+    def _put_down(self, ids: NDArray[np.int64], points: NDArray[np.float64]) -> None:
+        """Place stacks on whatever lies under their points (ray casts from above)."""
+        bottom = self._world.ray_heights(points).height + self._world.pool.radius
+        self._world.pool.place(ids.reshape(-1), self._stack_positions(points, bottom))
+
+    def _stack_positions(
+        self, points: NDArray[np.float64], bottom: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """Sphere centres of stacks on points (metres, (K, 2)) with bottoms at z."""
+        k = len(points)
+        xy = np.repeat(points, self._layers, axis=0)
+        z = (bottom[:, None] + self._rise[None, :]).reshape(-1)
+        return np.column_stack([xy, z]).reshape(k * self._layers, 3)
+
+    def _limit_penetration(
+        self, particles: NDArray[np.int64], targets: NDArray[np.float64]
+    ) -> None:
+        world = self._world
+        hits = world.object_footprint(targets, margin=self._proxy.penetration_margin)
+        deep = np.flatnonzero(hits.object >= 0)
+        if deep.size == 0:
+            return
+        bottom_ids = particles[deep, 0]
+        z = world.pool.positions(bottom_ids)[:, 2]
+        top = hits.top[deep] + world.pool.radius
+        # A particle already on the top face stays where the physics put it.
+        below = z < top - world.pool.radius
+        if not np.any(below):
+            return
+        rows = deep[below]
+        world.pool.place(
+            particles[rows].reshape(-1), self._stack_positions(targets[rows], top[below])
+        )

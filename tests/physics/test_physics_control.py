@@ -1,0 +1,126 @@
+"""The per-frame control step: Wilson's force law, stacks, spin, and a real grasp."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import pybullet as pb
+import pytest
+
+from graspenv.physics import PhysicsWorld
+
+# The default scene's box: 6 × 6 × 3 cm, centred at the origin.
+BOX_HALF = 0.03
+BOX_HEIGHT = 0.03
+
+
+def test_control_law_drives_a_free_particle_to_its_target(world: PhysicsWorld) -> None:
+    r = world.scene.proxy.particle_radius
+    ids = world.pool.acquire(1)
+    world.pool.place(ids, [[0.1, 0.1, r]])
+    target = np.array([[0.15, 0.12]])
+    for _ in range(10):
+        end = world.step_frame(ids, target)
+    # Table friction on the pressed particle (2 × 0.5 × 0.05 N) against the control
+    # spring (m/Δt² = 576 N/m) leaves it up to 0.09 mm short.
+    np.testing.assert_allclose(end[0, :2], target[0], atol=1.5e-4)
+    assert np.linalg.norm(world.pool.velocities(ids)[0, :2]) < 1e-3
+
+
+def test_particle_follows_a_moving_target_without_lag(world: PhysicsWorld) -> None:
+    r = world.scene.proxy.particle_radius
+    ids = world.pool.acquire(1)
+    world.pool.place(ids, [[-0.2, 0.1, r]])
+    speed = 0.3  # m/s along x
+    for f in range(1, 31):
+        end = world.step_frame(ids, [[-0.2 + speed * f * world.frame_dt, 0.1]])
+    # no velocity lag (u·Δt would be 1.25 mm), only the friction lag of under 0.1 mm
+    assert end[0, 0] == pytest.approx(-0.2 + speed * 30 * world.frame_dt, abs=1e-4)
+    assert world.pool.velocities(ids)[0, 0] == pytest.approx(speed, rel=1e-3)
+
+
+def test_force_clamp_limits_a_far_jump(make_world: Callable[..., PhysicsWorld]) -> None:
+    world = make_world(physics={"max_particle_force": 1.0, "max_particle_speed": 100.0})
+    r = world.scene.proxy.particle_radius
+    ids = world.pool.acquire(1)
+    world.pool.place(ids, [[0.0, 0.1, r]])
+    world.step_frame(ids, [[0.2, 0.1]])
+    # at most F/m acceleration for one frame: v <= (1 N / 10 g) · (1/60 s)
+    assert world.pool.velocities(ids)[0, 0] <= 1.0 / 0.01 / 60 + 1e-9
+
+
+def test_spin_is_held_exactly(world: PhysicsWorld) -> None:
+    r = world.scene.proxy.particle_radius
+    ids = world.pool.acquire(1)
+    world.pool.place(ids, [[0.1, 0.1, r]])
+    for _ in range(5):
+        world.step_frame(ids, [[0.12, 0.1]], spin=1.5)
+    body = int(world.pool.body_ids(ids)[0])
+    angular = pb.getBaseVelocity(body, physicsClientId=world.client)[1]
+    np.testing.assert_allclose(angular, [0.0, 0.0, 1.5], rtol=0, atol=1e-12)
+
+
+def test_stack_layers_are_held_above_the_bottom_one(
+    make_world: Callable[..., PhysicsWorld],
+) -> None:
+    world = make_world(proxy={"stack_layers": 3, "stack_spacing": 0.005})
+    r = world.scene.proxy.particle_radius
+    ids = world.pool.acquire(6).reshape(2, 3)
+    xyz = [[0.1, 0.1, r + 0.005 * layer] for layer in range(3)]
+    xyz += [[0.0, 0.0, BOX_HEIGHT + r + 0.005 * layer] for layer in range(3)]
+    world.pool.place(ids.ravel(), xyz)
+    for _ in range(20):
+        end = world.step_frame(ids, [[0.12, 0.1], [0.005, 0.0]])
+    assert end.shape == (2, 3, 3)
+    np.testing.assert_allclose(end[:, :, 2] - end[:, :1, 2], [[0, 0.005, 0.01]] * 2, atol=2e-4)
+    np.testing.assert_allclose(end[:, 0, 2], [r, BOX_HEIGHT + r], atol=3e-4)
+
+
+def test_bottom_particle_rides_on_top_and_drops_off_the_edge(world: PhysicsWorld) -> None:
+    r = world.scene.proxy.particle_radius
+    ids = world.pool.acquire(1)
+    world.pool.place(ids, [[0.0, 0.0, BOX_HEIGHT + r]])
+    for _ in range(5):
+        end = world.step_frame(ids, [[0.01, 0.0]])
+    assert end[0, 2] == pytest.approx(BOX_HEIGHT + r, abs=3e-4)
+    for _ in range(20):
+        end = world.step_frame(ids, [[BOX_HALF + 0.02, 0.0]])
+    assert end[0, 2] == pytest.approx(r, abs=3e-4)
+
+
+def _finger(centre: np.ndarray, angle: float, n: int = 14, radius: float = 0.0075) -> np.ndarray:
+    a = angle + 2 * math.pi * np.arange(n) / n
+    return centre + radius * np.column_stack([np.cos(a), np.sin(a)])
+
+
+def _smooth(s: float) -> float:
+    return 10 * s**3 - 15 * s**4 + 6 * s**5
+
+
+def test_squeeze_and_turn_with_ideal_targets_reaches_the_yaw(world: PhysicsWorld) -> None:
+    """Two round fingertips squeeze the box 3 mm deep and turn 90° about it in 1.5 s."""
+    r = world.scene.proxy.particle_radius
+    start, squeeze = BOX_HALF + 0.0075 + 0.004, BOX_HALF + 0.0075 - 0.003
+    sides = (np.array([1.0, 0.0]), np.array([-1.0, 0.0]))
+    ids = world.pool.acquire(28)
+    pts = np.concatenate([_finger(s * start, 0.0) for s in sides])
+    world.pool.place(ids, np.column_stack([pts, np.full(28, r)]))
+
+    def targets(d: float, theta: float) -> np.ndarray:
+        rot = np.array([[math.cos(theta), -math.sin(theta)], [math.sin(theta), math.cos(theta)]])
+        return np.concatenate([_finger(rot @ (s * d), theta) for s in sides])
+
+    for f in range(1, 16):
+        world.step_frame(ids, targets(start + (squeeze - start) * _smooth(f / 15), 0.0))
+    theta = 0.0
+    for f in range(1, 106):
+        new = math.pi / 2 * _smooth(min(f / 90, 1.0))
+        world.step_frame(ids, targets(squeeze, new), spin=(new - theta) / world.frame_dt)
+        theta = new
+    position, q = world.object_pose("box")
+    yaw = math.degrees(math.atan2(2 * (q[3] * q[2] + q[0] * q[1]), 1 - 2 * (q[1] ** 2 + q[2] ** 2)))
+    assert yaw == pytest.approx(90.0, abs=1.0)
+    assert np.hypot(position[0], position[1]) < 0.002
+    assert position[2] == pytest.approx(BOX_HEIGHT / 2, abs=1e-3)

@@ -1,0 +1,169 @@
+"""PhysicsWorld: scene building, queries, lifetime, determinism and reset."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+import pytest
+
+from graspenv.physics import PhysicsWorld
+
+# The default scene's box: 6 × 6 × 3 cm, centred at the origin.
+BOX_HALF = 0.03
+BOX_HEIGHT = 0.03
+
+
+def test_objects_start_resting_on_the_table(world: PhysicsWorld) -> None:
+    assert world.object_names == ("box",)
+    position, quaternion = world.object_pose("box")
+    np.testing.assert_allclose(position, [0.0, 0.0, BOX_HEIGHT / 2])
+    np.testing.assert_allclose(quaternion, [0.0, 0.0, 0.0, 1.0])
+    for _ in range(30):
+        world.step_frame([], np.zeros((0, 2)))
+    position, _ = world.object_pose("box")
+    linear, angular = world.object_velocity("box")
+    assert abs(position[2] - BOX_HEIGHT / 2) < 1e-4
+    assert np.linalg.norm(linear) < 1e-3 and np.linalg.norm(angular) < 1e-2
+
+
+def test_shapes_position_and_yaw(make_world: Callable[..., PhysicsWorld]) -> None:
+    objects = [
+        {
+            "name": "b",
+            "shape": "box",
+            "size": [0.04, 0.02, 0.01],
+            "position": [0.1, 0.0],
+            "yaw": 0.5,
+        },
+        {"name": "s", "shape": "sphere", "size": [0.02], "position": [-0.1, 0.0]},
+        {"name": "c", "shape": "cylinder", "size": [0.02, 0.05], "position": [0.0, 0.1]},
+    ]
+    world = make_world(objects=objects)
+    for name, z in (("b", 0.005), ("s", 0.02), ("c", 0.025)):
+        position, _ = world.object_pose(name)
+        assert position[2] == pytest.approx(z)
+    _, q = world.object_pose("b")
+    yaw = math.atan2(2 * (q[3] * q[2] + q[0] * q[1]), 1 - 2 * (q[1] ** 2 + q[2] ** 2))
+    assert yaw == pytest.approx(0.5)
+    with pytest.raises(KeyError, match="no object named 'x'"):
+        world.object_pose("x")
+
+
+def test_ray_heights_over_table_and_box_ignore_particles(world: PhysicsWorld) -> None:
+    ids = world.pool.acquire(1)
+    world.pool.place(ids, [[0.0, 0.0, BOX_HEIGHT + 0.002]])  # a particle on the box
+    hits = world.ray_heights([[0.0, 0.0], [0.02, -0.02], [0.1, 0.1], [0.0, 0.035]])
+    np.testing.assert_allclose(hits.height, [BOX_HEIGHT, BOX_HEIGHT, 0.0, 0.0], atol=1e-4)
+    np.testing.assert_array_equal(hits.object, [0, 0, -1, -1])
+
+
+def test_object_footprint_depth_margin_and_top(world: PhysicsWorld) -> None:
+    points = [[0.0, 0.0], [0.027, 0.0], [0.035, 0.0]]
+    hits = world.object_footprint(points, margin=0.005)
+    np.testing.assert_array_equal(hits.object, [0, -1, -1])
+    assert hits.depth[0] == pytest.approx(BOX_HALF, abs=1e-4)
+    assert hits.top[0] == pytest.approx(BOX_HEIGHT, abs=1e-4)
+    shallow = world.object_footprint(points, margin=0.0)
+    np.testing.assert_array_equal(shallow.object, [0, 0, -1])
+    assert shallow.depth[1] == pytest.approx(0.003, abs=1e-4)
+
+
+def test_particles_collide_with_table_and_box_not_each_other(world: PhysicsWorld) -> None:
+    r = world.scene.proxy.particle_radius
+    ids = world.pool.acquire(3)
+    # two particles overlapping each other, one driven into the box's +x face
+    world.pool.place(ids, [[0.1, 0.1, r], [0.1 + r, 0.1, r], [0.05, 0.0, r]])
+    for _ in range(20):
+        end = world.step_frame(ids, [[0.1, 0.1], [0.1 + r, 0.1], [0.031, 0.0]])
+    # the overlapping pair stays overlapped: no particle-particle contact
+    np.testing.assert_allclose(end[:2, :2], [[0.1, 0.1], [0.1 + r, 0.1]], atol=1e-6)
+    # all rest on the table, not in it
+    np.testing.assert_allclose(end[:, 2], r, atol=1e-4)
+    # the third is stopped by the box face (its target lies inside the box) and pushes it
+    report = world.contact_report("box")
+    particles, force = report.particle_normal_forces()
+    np.testing.assert_array_equal(particles, [ids[2]])
+    assert force[0] > 0.1
+    normal = report.normal[report.particle == ids[2]][0]
+    np.testing.assert_allclose(normal, [-1.0, 0.0, 0.0], atol=1e-3)
+    box_x = world.object_pose("box")[0][0]
+    assert end[2, 0] == pytest.approx(box_x + BOX_HALF + r, abs=3e-4)
+
+
+def test_close_twice_and_use_after_close(scene: object) -> None:
+    world = PhysicsWorld(scene)  # type: ignore[arg-type]
+    world.close()
+    world.close()
+    with pytest.raises(RuntimeError, match="closed"):
+        world.object_pose("box")
+
+
+def test_context_manager_closes(scene: object) -> None:
+    with PhysicsWorld(scene) as world:  # type: ignore[arg-type]
+        assert world.num_bodies > 0
+    with pytest.raises(RuntimeError):
+        _ = world.num_bodies
+
+
+def _session(world: PhysicsWorld, frames: int = 40) -> np.ndarray:
+    """Fingers squeeze and push the box, with touch-downs, lift-offs and pool growth."""
+    r = world.scene.proxy.particle_radius
+    batch = world.scene.physics.pool_batch
+    a = np.arange(8) * 2 * math.pi / 8
+    ring = 0.0075 * np.column_stack([np.cos(a), np.sin(a)])
+    left = world.pool.acquire(8)
+    right = world.pool.acquire(8)
+    x_axis = np.array([1.0, 0.0])
+    world.pool.place(left, np.column_stack([ring - 0.042 * x_axis, np.full(8, r)]))
+    world.pool.place(right, np.column_stack([ring + 0.042 * x_axis, np.full(8, r)]))
+    states = []
+    extra = np.zeros(0, dtype=np.int64)
+    for f in range(frames):
+        d = 0.042 - 0.01 * min(f / 10, 1.0)
+        shift = np.array([0.0, 0.001 * f])
+        ids = np.concatenate([left, right, extra])
+        targets = [ring - d * x_axis + shift, ring + d * x_axis + shift]
+        if extra.size:
+            targets.append(np.tile([0.0, -0.05], (extra.size, 1)))
+        world.step_frame(ids, np.concatenate(targets), spin=0.1)
+        if f == 20:  # a burst of touch-downs that makes the pool grow
+            extra = world.pool.acquire(batch)
+            world.pool.place(extra, np.tile([0.0, -0.06, r], (batch, 1)))
+        if f == 30:
+            world.pool.release(extra)
+            extra = np.zeros(0, dtype=np.int64)
+        states.append(np.concatenate([*world.object_pose("box"), *world.object_velocity("box")]))
+    states.append(world.pool.positions(np.concatenate([left, right])).ravel())
+    return np.concatenate(states)
+
+
+def test_same_commands_give_bit_identical_states(
+    make_world: Callable[..., PhysicsWorld],
+) -> None:
+    first = _session(make_world())
+    second = _session(make_world())
+    assert first.tobytes() == second.tobytes()
+
+
+@pytest.mark.parametrize("with_ball", [False, True])
+def test_reset_restores_the_scene_bit_for_bit_without_leaking(
+    make_world: Callable[..., PhysicsWorld], with_ball: bool
+) -> None:
+    objects = [{"name": "box", "shape": "box", "size": [0.06, 0.06, 0.03], "mass": 0.2}]
+    if with_ball:
+        objects.append({"name": "ball", "shape": "sphere", "size": [0.02], "position": [0.0, 0.1]})
+    fresh = _session(make_world(objects=objects))
+    world = make_world(objects=objects)
+    first = _session(world)
+    assert first.tobytes() == fresh.tobytes()
+    bodies, capacity = world.num_bodies, world.pool.capacity
+    for _ in range(2):
+        world.reset()
+        assert world.num_bodies == bodies and world.pool.capacity == capacity
+        assert world.pool.num_active == 0
+        position, quaternion = world.object_pose("box")
+        np.testing.assert_array_equal(position, [0.0, 0.0, BOX_HEIGHT / 2])
+        np.testing.assert_array_equal(quaternion, [0.0, 0.0, 0.0, 1.0])
+        assert _session(world).tobytes() == fresh.tobytes()

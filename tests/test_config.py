@@ -1,0 +1,110 @@
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from graspenv.config import ConfigError, SceneConfig, load_config, to_dict
+
+CONFIGS = Path(__file__).resolve().parents[1] / "envs_configs"
+
+
+def test_default_file_matches_built_in_default() -> None:
+    assert load_config(CONFIGS / "default.toml") == load_config(None) == SceneConfig()
+
+
+@pytest.mark.parametrize("path", sorted(CONFIGS.glob("*.toml")), ids=lambda p: p.name)
+def test_every_shipped_file_loads(path: Path) -> None:
+    assert isinstance(load_config(path), SceneConfig)
+
+
+def test_dict_round_trip() -> None:
+    config = load_config(None, proxy={"method": "rigid"})
+    assert config.proxy.method == "rigid"
+    assert load_config(to_dict(config)) == config
+
+
+def test_overrides_merge_into_sections() -> None:
+    config = load_config(None, proxy={"window": 6}, surface={"fps": 120})
+    assert config.proxy.window == 6
+    assert config.proxy.method == "persistent"
+    assert config.surface.fps == 120.0
+    assert config.surface.resolution == (640, 480)
+
+
+def test_replace_keeps_other_fields() -> None:
+    config = SceneConfig().replace(physics={"substeps": 8})
+    assert config.physics.substeps == 8
+    assert config.proxy == SceneConfig().proxy
+
+
+@pytest.mark.parametrize(
+    ("data", "message"),
+    [
+        ({"surfce": {}}, "unknown key 'surfce'"),
+        ({"proxy": {"methd": "rigid"}}, "unknown key 'proxy.methd'"),
+        ({"proxy": {"method": "magic"}}, "'proxy.method' must be one of"),
+        ({"surface": {"size": [0.6]}}, "'surface.size' must have 2 values"),
+        ({"surface": {"fps": "fast"}}, "'surface.fps' must be a number"),
+        ({"surface": {"fps": -1}}, "surface.fps must be finite and > 0"),
+        ({"proxy": {"window": 2.5}}, "'proxy.window' must be an integer"),
+        ({"proxy": {"penetration_limit": 1}}, "must be true or false"),
+        (
+            {"objects": [{"name": "b", "shape": "box", "size": [0.1, 0.1]}]},
+            "needs 3 value(s)",
+        ),
+        (
+            {"objects": [{"name": "b", "shape": "cone", "size": [0.1]}]},
+            "'objects[0].shape' must be one of",
+        ),
+        ({"objects": [{"shape": "sphere", "size": [0.1]}]}, "name"),
+        (
+            {
+                "objects": [
+                    {"name": "a", "shape": "sphere", "size": [0.02]},
+                    {"name": "a", "shape": "sphere", "size": [0.02]},
+                ]
+            },
+            "names must be unique",
+        ),
+    ],
+)
+def test_bad_values_name_the_key(data: dict, message: str) -> None:
+    with pytest.raises(ConfigError, match=None) as err:
+        load_config(data)
+    assert message in str(err.value)
+    assert "<dict>" in str(err.value)
+
+
+def test_errors_name_the_file(tmp_path: Path) -> None:
+    path = tmp_path / "scene.toml"
+    path.write_text('[proxy]\nmethod = "magic"\n')
+    with pytest.raises(ConfigError) as err:
+        load_config(path)
+    assert str(path) in str(err.value)
+    assert "proxy.method" in str(err.value)
+
+
+def test_unparsable_file_is_a_config_error(tmp_path: Path) -> None:
+    path = tmp_path / "scene.toml"
+    path.write_text("[proxy\n")
+    with pytest.raises(ConfigError, match="cannot parse"):
+        load_config(path)
+
+
+def test_missing_file() -> None:
+    with pytest.raises(FileNotFoundError, match=r"not-there\.toml"):
+        load_config("not-there.toml")
+
+
+def test_object_height() -> None:
+    config = load_config(
+        {
+            "objects": [
+                {"name": "b", "shape": "box", "size": [0.1, 0.1, 0.03]},
+                {"name": "s", "shape": "sphere", "size": [0.02]},
+                {"name": "c", "shape": "cylinder", "size": [0.02, 0.05]},
+            ]
+        }
+    )
+    assert [o.height for o in config.objects] == pytest.approx([0.03, 0.04, 0.05])

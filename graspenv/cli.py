@@ -36,7 +36,48 @@ def _add_demo(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=_demo)
 
 
-_COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (_add_demo,)
+def _interactions(args: argparse.Namespace) -> int:
+    from graspenv.bench.interactions import METHODS, SCENARIOS, markdown_table, run_all
+
+    for name, known in (("scenario", SCENARIOS), ("method", METHODS)):
+        for value in getattr(args, name) or ():
+            if value not in known:
+                raise ValueError(f"unknown {name} {value!r}; expected one of {list(known)}")
+    total = len(args.scenario or SCENARIOS) * len(args.method or METHODS)
+    done = 0
+
+    def progress(label: str) -> None:
+        nonlocal done
+        done += 1
+        print(f"[{done}/{total}] {label}", file=sys.stderr, flush=True)
+
+    results = run_all(args.scenario, args.method, args.config, progress)
+    table = markdown_table(results)
+    print(table)
+    if args.out:
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(table + "\n")
+        print(f"wrote {out}", file=sys.stderr)
+    return 0
+
+
+def _add_interactions(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "interactions",
+        help="measure the paper's interactions for each proxy method (Markdown table)",
+    )
+    p.add_argument("--scenario", action="append", help="one scenario (repeatable); default all")
+    p.add_argument("--method", action="append", help="one proxy method (repeatable); default all")
+    p.add_argument("--config", default=None, help="base scene file (default: built-in)")
+    p.add_argument("--out", default=None, help="also write the table to this file")
+    p.set_defaults(run=_interactions)
+
+
+_COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
+    _add_demo,
+    _add_interactions,
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -34,7 +34,7 @@ __all__ = [
 
 ShapeName = Literal["box", "sphere", "cylinder"]
 ProxyName = Literal["persistent", "instant", "rigid"]
-MatcherName = Literal["fast", "exhaustive"]
+MatcherName = Literal["auto", "fast", "exhaustive"]
 
 
 class ConfigError(ValueError):
@@ -143,13 +143,19 @@ class ProxyConfig:
     Attributes:
         method: ``persistent`` (Wilson ITS 2009), ``instant`` (UIST 2008) or ``rigid``.
         particle_radius: sphere radius, metres.
-        particle_mass: kilograms per sphere.
+        particle_mass: kilograms per sphere. With ``physics.control_time`` it sets the
+            grip stiffness m/Δt² (1152 N/m per particle at the defaults): stiff enough
+            that a firm squeeze holds a box against a third finger's push (under
+            2 mm), soft enough that the force clamp is reached only past 4 mm.
         particle_friction: lateral friction of a particle. Bullet multiplies it by the
             object's: the default 2.0 gives a finger–object coefficient of 1.0 on a 0.5
             object, which a firm squeeze needs to resist a third finger's push; a
             bottom particle's friction acts only in the table plane.
-        window: n in the windowed sum of squared distances (points each side, total n+1).
-        matcher: ``fast`` (FFT alignment then a local search) or ``exhaustive``.
+        window: n of the windowed sum of squared distances over points i = -n/2..n/2
+            (n + 1 points; an odd n acts as n - 1).
+        matcher: ``exhaustive`` (the paper's search over every shift), ``fast`` (FFT
+            alignment then a local search) or ``auto`` (exhaustive while it is the
+            cheaper of the two, up to 256 × 256 point pairs, fast beyond).
         search: half-width S of the fast matcher's local search, contour indices.
         stack_layers: spheres per contour point (1 = single layer).
         stack_spacing: height between stacked spheres, metres.
@@ -169,10 +175,10 @@ class ProxyConfig:
 
     method: ProxyName = "persistent"
     particle_radius: float = 0.002
-    particle_mass: float = 0.01
+    particle_mass: float = 0.02
     particle_friction: float = 2.0
     window: int = 4
-    matcher: MatcherName = "fast"
+    matcher: MatcherName = "auto"
     search: int = 3
     stack_layers: int = 1
     stack_spacing: float = 0.004

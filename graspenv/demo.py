@@ -213,9 +213,8 @@ def run_demo(
             centre = np.asarray(obj.position) + np.asarray(SLIDE) / 2
             picture = _picture(sim, mask, report.contacts, obj, centre, labels)
             if index % _GIF_STRIDE == 0:
-                pictures.append(
-                    cv2.resize(picture, None, fx=0.5, fy=0.5, interpolation=cv2.INTER_AREA)
-                )
+                half = cv2.resize(picture, None, fx=0.5, fy=0.5, interpolation=cv2.INTER_AREA)
+                pictures.append(np.array(half).astype(np.uint8))
             if index in sheet_frames:
                 sheet.append(picture)
         end_position, _ = sim.object_pose(obj.name)

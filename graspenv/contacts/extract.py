@@ -105,11 +105,14 @@ class Component:
 
     Attributes:
         chain: the traced boundary-pixel centres as OpenCV returns them, pixels
-            (column, row), shape (K, 2), int32, in OpenCV's orientation (clockwise on
-            screen, which is counter-clockwise in a y-up frame); K = 1 for a single
-            pixel and the chain doubles back along one-pixel-wide parts.
-        outline: the chain offset outward by half a pixel (see the module docstring),
-            pixels (column, row), shape (L, 2), float64, L ≥ 3 with positive area.
+            (column, row), shape (K, 2), int32, in OpenCV's orientation:
+            counter-clockwise as seen on the image, hence also in the world frame,
+            though its shoelace area in raw (column, row) numbers is negative (rows go
+            down). K = 1 for a single pixel; the chain doubles back along
+            one-pixel-wide parts.
+        outline: the chain moved outward onto the pixel footprint's edge and smoothed
+            (module docstring), pixels (column, row), shape (L, 2), float64, L ≥ 3,
+            same orientation, enclosing a positive area.
         area: number of pixels inside the outer boundary (holes included), pixels².
         centroid: centroid of the area enclosed by the traced chain, pixels
             (column, row), shape (2,); the mean of the chain where it encloses none.
@@ -183,11 +186,11 @@ def outline_from_chain(chain: NDArray[np.integer]) -> NDArray[np.float64]:
     if len(points) == 1:
         corners = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, 1.0], [1.0, -1.0]])
         return points[0] + _CAP * corners
-    after = np.roll(points, -1, axis=0)
-    before = np.roll(points, 1, axis=0)
-    # OpenCV's outer borders run clockwise on screen (negative shoelace area in
-    # (column, row)), for which (-dy, dx) of the tangent points out of the shape.
-    # Check rather than trust it; a chain enclosing nothing has no inside.
+    ring = np.concatenate([points[-1:], points, points[:1]])  # cheaper than np.roll
+    before, after = ring[:-2], ring[2:]
+    # OpenCV's outer borders have a negative shoelace area in (column, row), for
+    # which (-dy, dx) of the tangent points out of the shape. Check rather than
+    # trust it; a chain enclosing nothing has no inside, and either side will do.
     twice_area = float(np.sum(points[:, 0] * after[:, 1] - points[:, 1] * after[:, 0]))
     outward = 1.0 if twice_area <= 0.0 else -1.0
 
@@ -195,12 +198,12 @@ def outline_from_chain(chain: NDArray[np.integer]) -> NDArray[np.float64]:
     length = np.hypot(tangent[:, 0], tangent[:, 1])
     tip = length == 0.0  # the chain doubles back here: the end of a line or spur
     length[tip] = 1.0
-    normal = outward * np.stack([-tangent[:, 1], tangent[:, 0]], axis=1) / length[:, None]
+    normal = tangent[:, ::-1] * np.array([-outward, outward]) / length[:, None]
     # Half a pixel along the dominant axis of the normal: 0.5·max(|n_x|, |n_y|) along n.
-    offset = 0.5 * np.max(np.abs(normal), axis=1, keepdims=True)
+    offset = 0.5 * np.abs(normal).max(axis=1, keepdims=True)
     outline = points + offset * normal
-    fixed = np.zeros(len(outline), dtype=bool)
-    if np.any(tip):
+    fixed = None
+    if tip.any():
         pieces: list[NDArray[np.float64]] = []
         start = 0
         for end in np.flatnonzero(tip).tolist():
@@ -214,19 +217,15 @@ def outline_from_chain(chain: NDArray[np.integer]) -> NDArray[np.float64]:
             start = end + 1
         pieces.append(outline[start:])
         outline = np.concatenate(pieces)
-        fixed = np.concatenate(
-            [
-                np.ones(len(piece), dtype=bool) if i % 2 else np.zeros(len(piece), dtype=bool)
-                for i, piece in enumerate(pieces)
-            ]
-        )
+        fixed = np.concatenate([np.full(len(piece), i % 2 == 1) for i, piece in enumerate(pieces)])
     if len(outline) < _SMOOTH_FROM:
         return outline
     # The pixel staircase is 5 % longer than the edge it follows and spaces resampled
     # points unevenly. [1, 2, 1]/4 removes the zigzag but shrinks curves; following
     # it by [-1, 6, -1]/4 restores them to fourth order: together [-1, 4, 10, 4, -1]
     # / 16. Cap corners stay put so thin lines keep their footprint.
-    near = np.roll(outline, 1, axis=0) + np.roll(outline, -1, axis=0)
-    far = np.roll(outline, 2, axis=0) + np.roll(outline, -2, axis=0)
-    smooth = (10.0 * outline + 4.0 * near - far) / 16.0
+    ext = np.concatenate([outline[-2:], outline, outline[:2]])
+    smooth = (10.0 * outline + 4.0 * (ext[1:-3] + ext[3:-1]) - (ext[:-4] + ext[4:])) / 16.0
+    if fixed is None:
+        return smooth
     return np.where(fixed[:, None], outline, smooth)

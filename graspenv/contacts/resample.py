@@ -17,9 +17,16 @@ def _as_polyline(polyline: ArrayLike, name: str = "polyline") -> NDArray[np.floa
     points = np.asarray(polyline, dtype=np.float64)
     if points.ndim != 2 or points.shape[1] != 2 or len(points) == 0:
         raise ValueError(f"{name} must have shape (N, 2) with N >= 1, got {points.shape}")
-    if not np.all(np.isfinite(points)):
+    if not np.isfinite(points).all():
         raise ValueError(f"{name} must be finite")
     return points
+
+
+def _shoelace(points: NDArray[np.float64]) -> float:
+    # About the first vertex, so world coordinates far from the origin lose no
+    # precision to the cancelling cross products.
+    rel = points[1:] - points[0]
+    return 0.5 * float(np.sum(rel[:-1, 0] * rel[1:, 1] - rel[:-1, 1] * rel[1:, 0]))
 
 
 def signed_area(polyline: ArrayLike) -> float:
@@ -33,12 +40,7 @@ def signed_area(polyline: ArrayLike) -> float:
         Area in the frame's units squared; positive when the vertices run
         counter-clockwise in that frame, zero for fewer than three vertices or a line.
     """
-    points = _as_polyline(polyline)
-    # About the first vertex, so world coordinates far from the origin lose no
-    # precision to the cancelling cross products.
-    rel = points - points[0]
-    after = np.roll(rel, -1, axis=0)
-    return 0.5 * float(np.sum(rel[:, 0] * after[:, 1] - rel[:, 1] * after[:, 0]))
+    return _shoelace(_as_polyline(polyline))
 
 
 def orient_ccw(polyline: ArrayLike) -> NDArray[np.float64]:
@@ -55,7 +57,7 @@ def orient_ccw(polyline: ArrayLike) -> NDArray[np.float64]:
         chosen before orienting stays the start).
     """
     points = _as_polyline(polyline)
-    if signed_area(points) >= 0.0:
+    if _shoelace(points) >= 0.0:
         return points
     return np.concatenate([points[:1], points[:0:-1]])
 
@@ -90,7 +92,7 @@ def resample_closed(
     points = _as_polyline(polyline)
     if not (np.isfinite(spacing) and spacing > 0.0):
         raise ValueError(f"spacing must be finite and > 0, got {spacing}")
-    step = np.roll(points, -1, axis=0) - points
+    step = np.concatenate([points[1:], points[:1]]) - points
     length = np.hypot(step[:, 0], step[:, 1])
     arc = np.concatenate([[0.0], np.cumsum(length)])
     perimeter = float(arc[-1])
@@ -104,7 +106,7 @@ def resample_closed(
     targets = np.mod(origin + (perimeter / count) * np.arange(count), perimeter)
     # side="right" skips zero-length segments (repeated vertices): a target sitting
     # exactly on a vertex is taken from the segment that leaves it.
-    segment = np.clip(np.searchsorted(arc, targets, side="right") - 1, 0, len(points) - 1)
+    segment = np.minimum(np.searchsorted(arc, targets, side="right") - 1, len(points) - 1)
     safe = np.where(length[segment] > 0.0, length[segment], 1.0)
     fraction = (targets - arc[segment]) / safe
     return points[segment] + fraction[:, None] * step[segment]
@@ -119,7 +121,7 @@ def _closest_arc_position(
 ) -> float:
     """Arc-length position of the polyline point closest to ``start``."""
     target = np.asarray(start, dtype=np.float64)
-    if target.shape != (2,) or not np.all(np.isfinite(target)):
+    if target.shape != (2,) or not np.isfinite(target).all():
         raise ValueError(f"start must be a finite point of shape (2,), got {target.shape}")
     squared = length * length
     along = np.einsum("ij,ij->i", target - points, step)

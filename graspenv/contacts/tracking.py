@@ -21,16 +21,18 @@ finger stays down.
    fingertips, its centroid far from both, continues the nearer one.
 3. *Splits.* A current contact left over that overlaps a previous contact has split
    off the nearest previous contact it overlaps: ``"new"``, a fresh id, and
-   ``sources == (parent id,)``. (The parent's id went to a piece in step 1 or 2:
-   overlap is symmetric, so a parent left over after step 1 took the piece nearest
-   to it in step 2.)
+   ``sources == (parent id,)``. (The parent itself was settled in step 1 or 2:
+   overlap is symmetric, so a parent still left over after step 1 went to the
+   nearest piece it overlaps in step 2, which keeps its id.)
 4. What is still left over is a touch-down (``"new"``, fresh id, no sources) or a
    lift-off (its id is in ``ContactFrame.removed``).
 
 A previous contact and a current one *overlap* when either's centroid lies inside the
 other's outline, or at least a quarter of either's outline lies inside the other's:
 the second clause catches two fingertips that slide together faster than their own
-half-width in one frame, whose old centroids the merged blob no longer covers.
+half-width in one frame, whose old centroids the merged blob no longer covers. The
+price: a finger lifted in the same frame as a neighbour slides over a quarter of its
+old outline is reported as merged into the neighbour rather than lifted.
 
 So ``sources`` is ``(id,)`` for a plain continuing contact, ``(id, *merged ids)``
 (merged ids ascending) for one that swallowed others, ``(parent,)`` for a piece split
@@ -78,8 +80,11 @@ class Contact:
         contour: metres, world frame, shape (N, 2), N ≥ 3, counter-clockwise seen
             from above, resampled evenly at ``ContactConfig.spacing``; read-only.
         outline: the un-resampled boundary, metres, world frame, shape (L, 2),
-            counter-clockwise, half a pixel outside the boundary pixels' centres
-            (:mod:`graspenv.contacts.extract`); read-only.
+            counter-clockwise, on the pixel footprint's edge rather than through the
+            boundary pixels' centres, lightly smoothed
+            (:mod:`graspenv.contacts.extract`); read-only. Resample it yourself, e.g.
+            from a predicted start point, with
+            :func:`graspenv.contacts.resample.resample_closed`.
         centroid: metres, world frame, shape (2,); read-only.
         area: pixels inside the outer boundary times the pixel's area, m².
         status: ``"new"`` (touch-down or split-off piece) or ``"continuing"``.
@@ -96,6 +101,7 @@ class Contact:
 
     @property
     def is_new(self) -> bool:
+        """Whether the contact appeared this frame."""
         return self.status == "new"
 
 
@@ -198,14 +204,13 @@ class ContactTracker:
                 surface's shape.
         """
         image = validate_mask(mask, self.surface.shape)
-        blobs = [
-            _Blob(
-                outline=orient_ccw(self.surface.pixel_to_world(c.outline)),
-                centroid=self.surface.pixel_to_world(c.centroid),
-                area=c.area * self._pixel_area,
+        blobs = []
+        for component in find_components(image, self.config.min_area):
+            # One transform for the outline and the centroid (its last row).
+            world = self.surface.pixel_to_world(np.vstack([component.outline, component.centroid]))
+            blobs.append(
+                _Blob(orient_ccw(world[:-1]), world[-1], component.area * self._pixel_area)
             )
-            for c in find_components(image, self.config.min_area)
-        ]
         keeps, sources = self._match(self._previous, blobs)
 
         by_id = {c.id: c for c in self._previous}

@@ -424,7 +424,7 @@ class PhysicsWorld:
         (or h if longer). At Δt = h this is the paper's law; for Δt > h the feed
         forward keeps a free particle on a moving target instead of lagging by u·Δt.
         A particle held off its point by a depth d (inside an object) pushes with
-        about m·d/Δt² (576 N/m at the defaults: squeezing deeper grips harder). A
+        about m·d/Δt² (1152 N/m at the defaults: squeezing deeper grips harder). A
         bottom particle sliding on the table stays short of its point by its table
         friction over that stiffness (about 0.09 mm at the defaults).
 
@@ -615,6 +615,24 @@ class PhysicsWorld:
             self.pool.physics_steps += 1
         self._restore_time_step(h)
         self.bullet_seconds = bullet
+
+    def rest_heights(self, xy: ArrayLike) -> NDArray[np.float64]:
+        """Where a particle lowered from above onto each point comes to rest.
+
+        The height of the highest surface under the particle's disc (rays from its
+        centre and four points 0.9 radius around it), so a particle whose centre is
+        just outside an object's side but whose sphere would overlap it rests on the
+        top face instead of being put into the side.
+
+        Args:
+            xy: particle centres, metres, world frame, shape (N, 2).
+
+        Returns:
+            Height of the supporting surface, metres (0: table), shape (N,).
+        """
+        points = np.asarray(xy, dtype=float).reshape(-1, 2)
+        top = self._ray_top()
+        return self._support_heights(np.column_stack([points, np.full(len(points), top)]))
 
     def _support_heights(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
         """Height of the highest surface below each particle's disc (0: table), (n,).

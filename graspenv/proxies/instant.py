@@ -1,8 +1,9 @@
 """Instant particle proxies (Wilson et al., UIST 2008): the baseline that cannot grasp.
 
 Every frame, every strong-gradient pixel of the mask (subsampled by
-``proxy.instant_stride``) becomes a particle, put down by ray casting where the image
-motion says that pixel was in the last frame and driven to where it is now; all of
+``proxy.instant_stride``) becomes a particle, put down from above where the pixel is
+now (on an object's top if its sphere would overlap the object) and moved through
+the frame with the image motion (dense optical flow) that brought it there; all of
 them are replaced in the next frame. Nothing persists, so a particle that ends up
 inside an object's footprint is put down on its top next frame instead of squeezing
 its side: fingers can push objects but cannot hold them.
@@ -54,10 +55,12 @@ class InstantProxies:
         if len(pixels) == 0:
             self._particles = np.zeros(0, np.int64)
             return ProxyCommand(np.zeros((0, 1), np.int64), np.zeros((0, 2)), np.zeros(0))
-        targets = self._surface.pixel_to_world(pixels)
-        starts = self._surface.pixel_to_world(backward_flow(previous, mask, pixels))
+        now = self._surface.pixel_to_world(pixels)
+        before = self._surface.pixel_to_world(backward_flow(previous, mask, pixels))
+        # Each particle keeps the pixel's image velocity for one frame.
+        targets = 2.0 * now - before
         ids = pool.acquire(len(pixels))
-        z = self._world.ray_heights(starts).height + pool.radius
-        pool.place(ids, np.column_stack([starts, z]))
+        z = self._world.rest_heights(now) + pool.radius
+        pool.place(ids, np.column_stack([now, z]))
         self._particles = ids
         return ProxyCommand(ids[:, None], targets, np.zeros(len(ids)))

@@ -174,8 +174,8 @@ class PersistentProxies:
         return _Track(points, ids, contact.centroid.copy())
 
     def _put_down(self, ids: NDArray[np.int64], points: NDArray[np.float64]) -> None:
-        """Place stacks on whatever lies under their points (ray casts from above)."""
-        bottom = self._world.ray_heights(points).height + self._world.pool.radius
+        """Place stacks on whatever lies under their points' discs (rays from above)."""
+        bottom = self._world.rest_heights(points) + self._world.pool.radius
         self._world.pool.place(ids.reshape(-1), self._stack_positions(points, bottom))
 
     def _stack_positions(

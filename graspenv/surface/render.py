@@ -18,7 +18,6 @@ sharper than about 60° may overshoot by up to half a pixel more.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable
 
 import cv2
@@ -44,6 +43,9 @@ _SHIFT = 8
 _MAX_SEGMENT_PX = 1.0
 # Margin around a shape's pixel bounding box, for the anti-aliased border.
 _MARGIN = 2
+# Larger shapes would take millions of outline vertices and overflow the fixed-point
+# coordinates (2**16 pixels times 2**_SHIFT stays well inside 32 bits).
+_MAX_RADIUS_PX = 1 << 16
 # A corner's miter may move its vertex at most this many times the inset.
 _MITER_LIMIT = 4.0
 
@@ -60,6 +62,24 @@ def _shapes_of(hand_or_shapes: Hand | ContactShape | Iterable[ContactShape]) -> 
                 f"hand_or_shapes[{i}] must be a ContactShape, got {type(shape).__name__}"
             )
     return shapes
+
+
+def _on_table(shapes: list[ContactShape], surface: Surface) -> list[ContactShape]:
+    """The shapes that may cover a pixel; ValueError for one too large to draw."""
+    if not shapes:
+        return shapes
+    height, width = surface.shape
+    centres = surface.world_to_pixel(np.array([shape.centre for shape in shapes]))
+    radii = np.array([shape.bounding_radius for shape in shapes]) / surface.pixel_size.min()
+    nearest = np.clip(centres, -0.5, (width - 0.5, height - 0.5))
+    reach = np.hypot(*(centres - nearest).T) - radii
+    for shape, radius, gap in zip(shapes, radii, reach, strict=True):
+        if radius > _MAX_RADIUS_PX and gap < _MARGIN:
+            raise ValueError(
+                f"{shape!r} spans {radius:.0f} pixels from its centre; at most "
+                f"{_MAX_RADIUS_PX} can be drawn"
+            )
+    return [shape for shape, gap in zip(shapes, reach, strict=True) if gap < _MARGIN]
 
 
 def _repeated_vertices(
@@ -132,11 +152,12 @@ def render_coverage(
         in between along the (inset) edges; union over shapes by maximum.
 
     Raises:
-        ValueError: an item is not a ContactShape.
+        ValueError: an item is not a ContactShape, or a shape that reaches the table
+            spans more than 65 536 pixels from its centre.
     """
-    shapes = _shapes_of(hand_or_shapes)
     height, width = surface.shape
     coverage = np.zeros((height, width), dtype=np.uint8)
+    shapes = _on_table(_shapes_of(hand_or_shapes), surface)
     if not shapes:
         return coverage
     max_segment = _MAX_SEGMENT_PX * float(surface.pixel_size.min())
@@ -152,10 +173,8 @@ def render_coverage(
     drawable = counts >= 3
     if not drawable.all():
         # Degenerate outlines would make reduceat misbehave; they cover nothing anyway.
-        keep = np.repeat(drawable, counts)
-        pixels, counts = pixels[keep], counts[drawable]
-        shapes = [shape for shape, ok in zip(shapes, drawable, strict=True) if ok]
-        if not shapes:
+        pixels, counts = pixels[np.repeat(drawable, counts)], counts[drawable]
+        if len(counts) == 0:
             return coverage
     starts = np.cumsum(counts) - counts
     pixels, survived = _inset(pixels, starts, AA_EDGE_BIAS)
@@ -164,17 +183,12 @@ def render_coverage(
     low = np.maximum(low, 0)
     high = np.minimum(high, (width - 1, height - 1))
     scale = float(1 << _SHIFT)
-    for i, shape in enumerate(shapes):
+    for i in range(len(counts)):
         (c0, r0), (c1, r1) = low[i].tolist(), high[i].tolist()
         if not survived[i] or c0 > c1 or r0 > r1:
             continue  # thinner than the inset, or wholly off the table
         # Coordinates relative to the clipped region; OpenCV clips what falls outside.
         relative = (pixels[starts[i] : starts[i] + counts[i]] - (c0, r0)) * scale
-        if np.abs(relative).max() >= 2.0**31:
-            raise ValueError(
-                f"{shape!r} reaches {math.ceil(np.abs(relative).max() / scale)} pixels "
-                f"from the image: too far for fixed-point drawing"
-            )
         region = np.zeros((r1 - r0 + 1, c1 - c0 + 1), dtype=np.uint8)
         cv2.fillPoly(region, [np.round(relative).astype(np.int32)], 255, cv2.LINE_AA, _SHIFT)
         window = coverage[r0 : r1 + 1, c0 : c1 + 1]

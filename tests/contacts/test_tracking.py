@@ -215,6 +215,8 @@ def test_merge_keeps_the_nearest_id_and_lists_the_other(
 ) -> None:
     surface = Surface()
     tracker = ContactTracker(surface, ContactConfig())
+    # Tips 16 mm long along the axis: apart before, overlapping by at least 2 mm after.
+    assume(gap - closing * (1.0 + 0.5 * lean) < 2 * TIP[0] - 0.002)
     axis = np.array([np.cos(angle), np.sin(angle)])
     left, right = -0.5 * gap * axis, 0.5 * gap * axis
     before = _frame(tracker, [(left, TIP, angle), (right, TIP, angle)])

@@ -74,9 +74,47 @@ def _add_interactions(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=_interactions)
 
 
+def _replay(args: argparse.Namespace) -> int:
+    from graspenv.replay import DEFAULT_THRESHOLD, replay
+
+    def progress(done: int, total: int | None) -> None:
+        print(f"[{done}/{total or '?'}] frames", file=sys.stderr, flush=True)
+
+    result = replay(
+        Path(args.source),
+        Path(args.out),
+        config=args.config,
+        fps=args.fps,
+        limit=args.limit,
+        progress=progress,
+        video=args.video,
+        threshold=DEFAULT_THRESHOLD if args.threshold is None else args.threshold,
+    )
+    print(result.text())
+    for path in result.files:
+        print(f"wrote {path}")
+    return 0
+
+
+def _add_replay(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "replay",
+        help="run a folder of mask images or a video through a scene; write an annotated video",
+    )
+    p.add_argument("source", help="folder of mask images (natural order) or a video file")
+    p.add_argument("--out", default="runs/replay", help="folder for what it writes")
+    p.add_argument("--config", default=None, help="scene file (default: built-in scene)")
+    p.add_argument("--fps", type=float, default=None, help="recording's rate (default: scene's)")
+    p.add_argument("--limit", type=int, default=None, help="replay at most this many frames")
+    p.add_argument("--video", choices=("mp4", "gif"), default="mp4", help="video format")
+    p.add_argument("--threshold", type=int, default=None, help="touched = grey > this (127)")
+    p.set_defaults(run=_replay)
+
+
 _COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
     _add_demo,
     _add_interactions,
+    _add_replay,
 )
 
 

@@ -17,11 +17,13 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from graspenv.bench.interactions import pinch
 from graspenv.config import ObjectConfig, SceneConfig, load_config
 from graspenv.contacts.tracking import ContactFrame
+from graspenv.geometry import rotate, yaw_of
 from graspenv.simulation import Simulation
 from graspenv.surface.render import render_mask
-from graspenv.surface.scripts import Script, two_finger_pinch
+from graspenv.surface.scripts import Script
 from graspenv.viz import (
     contact_sheet,
     draw_mask,
@@ -32,21 +34,12 @@ from graspenv.viz import (
     write_animation,
 )
 
-__all__ = ["DemoResult", "pinch_script", "run_demo", "yaw_of"]
+__all__ = ["DemoResult", "footprint", "pinch_script", "run_demo"]
 
-# The grasp: fingertip radius, the gap left at touch-down on each side, how far each
-# finger pushes into the box's face once squeezing, and the moves.
-FINGER_RADIUS = 0.008
-CLEARANCE = 0.004
+# How far each finger pushes into the box's face once squeezing, and the moves.
 DEPTH = 0.003
 TURN = math.pi / 2
 SLIDE = (0.10, 0.0)
-
-
-def yaw_of(quaternion: NDArray[np.float64]) -> float:
-    """Rotation about z of a quaternion (x, y, z, w), radians in (-π, π]."""
-    x, y, z, w = quaternion
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 def footprint(obj: ObjectConfig, position: NDArray[np.float64], yaw: float) -> NDArray[np.float64]:
@@ -57,29 +50,13 @@ def footprint(obj: ObjectConfig, position: NDArray[np.float64], yaw: float) -> N
     else:
         angle = np.linspace(0.0, 2 * math.pi, 48, endpoint=False)
         local = obj.size[0] * np.column_stack([np.cos(angle), np.sin(angle)])
-    c, s = math.cos(yaw), math.sin(yaw)
-    return local @ np.array([[c, s], [-s, c]]) + position[:2]
+    return rotate(local, yaw) + position[:2]
 
 
-def pinch_script(
-    obj: ObjectConfig, turn: float = TURN, slide: tuple[float, float] = SLIDE
-) -> Script:
-    """Squeeze ``obj`` across its x extent, turn it in place, slide it, lift."""
-    width = obj.size[0] if obj.shape == "box" else 2.0 * obj.size[0]
-    return two_finger_pinch(
-        centre=obj.position,
-        gap=width + 2 * CLEARANCE,
-        finger_radius=FINGER_RADIUS,
-        approach=CLEARANCE + DEPTH,
-        turn=turn,
-        slide=slide,
-        axis_angle=obj.yaw,
-        settle_frames=5,
-        squeeze_frames=20,
-        turn_frames=90,
-        slide_frames=90,
-        hold_frames=15,
-        lift_frames=5,
+def pinch_script(obj: ObjectConfig) -> Script:
+    """Squeeze ``obj`` across its x extent, turn it 90° in place, slide it 10 cm, lift."""
+    return pinch(
+        obj, DEPTH, turn=TURN, slide=SLIDE, turn_frames=90, slide_frames=90, hold_frames=15
     )
 
 

@@ -38,8 +38,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import SceneConfig, load_config, to_dict
-from graspenv.demo import footprint, yaw_of
-from graspenv.simulation import STAGES, FrameReport, Simulation
+from graspenv.demo import footprint
+from graspenv.geometry import yaw_of
+from graspenv.simulation import STAGES, FrameReport, Simulation, make_simulation
 from graspenv.viz import (
     draw_mask,
     draw_points,
@@ -469,7 +470,7 @@ def replay(
     *,
     video: VideoFormat = "mp4",
     threshold: int = DEFAULT_THRESHOLD,
-    scale: int = 2,
+    scale: int | None = None,
     progress_every: int = 100,
 ) -> ReplayResult:
     """Run recorded masks through a scene; write an annotated video and a summary.
@@ -491,7 +492,8 @@ def replay(
         video: ``"mp4"`` (streamed, any length) or ``"gif"`` (one frame in every few,
             about 20 per second, held in memory: for short clips).
         threshold: touched = grey value > ``threshold`` (see :func:`read_masks`).
-        scale: picture pixels per camera pixel (integer).
+        scale: picture pixels per camera pixel, an integer (``None``: 2 for an MP4,
+            1 for a GIF).
         progress_every: frames between ``progress`` calls.
 
     Returns:
@@ -508,6 +510,8 @@ def replay(
         raise ValueError(f"video must be 'mp4' or 'gif', got {video!r}")
     if limit is not None and (isinstance(limit, bool) or limit < 1):
         raise ValueError(f"limit must be a positive number of frames or None, got {limit!r}")
+    if scale is None:
+        scale = 2 if video == "mp4" else 1
     if isinstance(scale, bool) or not isinstance(scale, int) or scale < 1:
         raise ValueError(f"scale must be a positive integer, got {scale!r}")
     if progress_every < 1:
@@ -538,7 +542,7 @@ def replay(
     yaws: dict[str, list[float]] = {o.name: [] for o in scene.objects}
     sink = _VideoOut(out / f"replay.{video}", scene.surface.fps)
     started = time.perf_counter()
-    with Simulation(scene) as sim:
+    with make_simulation(scene) as sim:
         start = {name: sim.object_pose(name) for name in sim.object_names}
         previous = {name: yaw_of(q) for name, (_, q) in start.items()}
         unwrapped = dict(previous)

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
+from graspenv.geometry import yaw_of
 from graspenv.simulation import Simulation
 from graspenv.surface.hand import Hand
 from graspenv.surface.render import render_mask
@@ -36,20 +37,14 @@ __all__ = [
     "SCENARIOS",
     "Trace",
     "markdown_table",
+    "pinch",
     "play",
     "run_all",
-    "yaw_of",
 ]
 
 FINGER_RADIUS = 0.008
 CLEARANCE = 0.004
 BOX = ObjectConfig(name="box", shape="box", size=(0.06, 0.06, 0.03), mass=0.2)
-
-
-def yaw_of(quaternion: NDArray[np.float64]) -> float:
-    """Rotation about z of a quaternion (x, y, z, w), radians in (-π, π]."""
-    x, y, z, w = quaternion
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 @dataclass
@@ -144,7 +139,7 @@ def _angle_between(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
     return math.atan2(float(a[0] * b[1] - a[1] * b[0]), float(a @ b))
 
 
-def _pinch(obj: ObjectConfig, depth: float, **kwargs: Any) -> Script:
+def pinch(obj: ObjectConfig, depth: float, **kwargs: Any) -> Script:
     """Two fingertips either side of ``obj`` along x, pushing ``depth`` into it."""
     width = obj.size[0] if obj.shape == "box" else 2.0 * obj.size[0]
     return two_finger_pinch(
@@ -168,7 +163,7 @@ def _run(scene: SceneConfig, script: Script, name: str, extra_frames: int = 0) -
 
 def turn_in_place(base: SceneConfig, depth: float = 0.003) -> dict[str, float]:
     """Grasp a box from two sides and turn the pair 90° in place (paper test 3)."""
-    script = _pinch(BOX, depth, turn=math.pi / 2, turn_frames=90, slide_frames=0, hold_frames=15)
+    script = pinch(BOX, depth, turn=math.pi / 2, turn_frames=90, slide_frames=0, hold_frames=15)
     trace = _run(_with_objects(base, BOX), script, BOX.name)
     end = trace.at_end_of("hold")
     first, last = trace.hands[trace.phases["touch"][0]], trace.hands[end]
@@ -183,7 +178,7 @@ def turn_in_place(base: SceneConfig, depth: float = 0.003) -> dict[str, float]:
 
 def slide(base: SceneConfig, depth: float = 0.003) -> dict[str, float]:
     """Grasp a box from two sides and slide the pair 10 cm across the grip (test 4)."""
-    script = _pinch(BOX, depth, slide=(0.0, 0.10), turn_frames=0, slide_frames=90, hold_frames=15)
+    script = pinch(BOX, depth, slide=(0.0, 0.10), turn_frames=0, slide_frames=90, hold_frames=15)
     trace = _run(_with_objects(base, BOX), script, BOX.name)
     end = trace.at_end_of("hold")
     first, last = trace.hands[trace.phases["touch"][0]], trace.hands[end]
@@ -267,7 +262,7 @@ BALL = ObjectConfig(name="ball", shape="sphere", size=(0.02,), mass=0.05, rollin
 def ball_carry(base: SceneConfig, layers: int = 3) -> dict[str, float]:
     """Squeeze a ball and carry it 90° round a pivot 5 cm away (test 7)."""
     scene = _with_objects(base, BALL, proxy={"stack_layers": layers})
-    grip = _pinch(BALL, 0.003, turn_frames=0, slide_frames=0, lift_frames=0)
+    grip = pinch(BALL, 0.003, turn_frames=0, slide_frames=0, lift_frames=0)
     pivot = (BALL.position[0], BALL.position[1] - 0.05)
     carry = Phase(
         90, group=GroupMotion(("thumb", "index"), rotation=math.pi / 2, pivot=pivot), name="carry"

@@ -16,6 +16,7 @@ import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
 
 from graspenv.config import PhysicsConfig, ProxyConfig
+from graspenv.geometry import yaw_of
 from graspenv.physics.pool import OBJECT_GROUP, PARTICLE_GROUP
 
 __all__ = ["RigidBodies"]
@@ -97,9 +98,7 @@ class RigidBodies:
             position, orientation = pb.getBasePositionAndOrientation(
                 self._bodies[handle], self._client
             )
-            x, y, z, w = orientation
-            yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
-            rows.append((position[0], position[1], yaw))
+            rows.append((position[0], position[1], yaw_of(orientation)))
         return np.array(rows, dtype=float).reshape(-1, 3)
 
     def drive(self, handles: ArrayLike, goals: ArrayLike, h: float, tau: float) -> None:
@@ -123,8 +122,7 @@ class RigidBodies:
             body = self._bodies[handle]
             position, orientation = pb.getBasePositionAndOrientation(body, c)
             velocity, _ = pb.getBaseVelocity(body, c)
-            x, y, z, w = orientation
-            yaw = math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+            yaw = yaw_of(orientation)
             v_star = np.array([goal[0] - position[0], goal[1] - position[1]]) / tau
             speed = float(np.hypot(*v_star))
             if speed > v_max:

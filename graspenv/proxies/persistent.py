@@ -41,6 +41,7 @@ from graspenv.config import ContactConfig, ProxyConfig
 from graspenv.contacts.matching import correspond
 from graspenv.contacts.resample import resample_closed
 from graspenv.contacts.tracking import Contact, ContactFrame
+from graspenv.geometry import rotate
 from graspenv.physics.world import PhysicsWorld
 from graspenv.proxies.base import ProxyCommand, rigid_rotation
 
@@ -60,11 +61,6 @@ class _Track:
     points: NDArray[np.float64]
     particles: NDArray[np.int64]
     centroid: NDArray[np.float64]
-
-
-def _rotate(points: NDArray[np.float64], angle: float) -> NDArray[np.float64]:
-    c, s = np.cos(angle), np.sin(angle)
-    return points @ np.array([[c, s], [-s, c]])
 
 
 class PersistentProxies:
@@ -141,7 +137,7 @@ class PersistentProxies:
     def _follow(self, track: _Track, contact: Contact, turn: float) -> _Track:
         proxy = self._proxy
         if proxy.track_hand_rotation:
-            predicted = _rotate(track.points - track.centroid, turn) + contact.centroid
+            predicted = rotate(track.points - track.centroid, turn) + contact.centroid
         else:
             predicted = track.points
         if proxy.predicted_resampling:

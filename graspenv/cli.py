@@ -37,13 +37,25 @@ def _add_demo(sub: argparse._SubParsersAction) -> None:
 
 
 def _interactions(args: argparse.Namespace) -> int:
-    from graspenv.bench.interactions import METHODS, SCENARIOS, markdown_table, run_all
+    from graspenv.bench.interactions import (
+        ABLATION_SCENARIOS,
+        ABLATIONS,
+        METHODS,
+        SCENARIOS,
+        markdown_table,
+        run_all,
+    )
 
-    for name, known in (("scenario", SCENARIOS), ("method", METHODS)):
-        for value in getattr(args, name) or ():
+    variants = ABLATIONS if args.ablation else METHODS
+    scenarios = args.scenario or (ABLATION_SCENARIOS if args.ablation else list(SCENARIOS))
+    for name, values, known in (
+        ("scenario", args.scenario, SCENARIOS),
+        ("method", args.method, variants),
+    ):
+        for value in values or ():
             if value not in known:
                 raise ValueError(f"unknown {name} {value!r}; expected one of {list(known)}")
-    total = len(args.scenario or SCENARIOS) * len(args.method or METHODS)
+    total = len(scenarios) * len(args.method or variants)
     done = 0
 
     def progress(label: str) -> None:
@@ -51,7 +63,7 @@ def _interactions(args: argparse.Namespace) -> int:
         done += 1
         print(f"[{done}/{total}] {label}", file=sys.stderr, flush=True)
 
-    results = run_all(args.scenario, args.method, args.config, progress)
+    results = run_all(scenarios, args.method, args.config, progress, variants)
     table = markdown_table(results)
     print(table)
     if args.out:
@@ -71,6 +83,11 @@ def _add_interactions(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--method", action="append", help="one proxy method (repeatable); default all")
     p.add_argument("--config", default=None, help="base scene file (default: built-in)")
     p.add_argument("--out", default=None, help="also write the table to this file")
+    p.add_argument(
+        "--ablation",
+        action="store_true",
+        help="compare our tracking changes to the paper's plain form (turn and slide)",
+    )
     p.set_defaults(run=_interactions)
 
 

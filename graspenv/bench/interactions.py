@@ -309,22 +309,45 @@ METHODS: dict[str, dict[str, Any]] = {
 }
 
 
+#: What each of our changes to the paper's tracking buys: persistent-proxy variants,
+#: label → proxy section overrides, compared on the turn and the slide.
+ABLATIONS: dict[str, dict[str, Any]] = {
+    "both (default)": {},
+    "hand rotation only": {"predicted_resampling": False},
+    "predicted resampling only": {"track_hand_rotation": False},
+    "neither (paper's plain form)": {"track_hand_rotation": False, "predicted_resampling": False},
+    "both, exhaustive matcher": {"matcher": "exhaustive"},
+    "both, fast matcher": {"matcher": "fast"},
+}
+ABLATION_SCENARIOS = ("turn 90°", "slide 10 cm")
+
+
 def run_all(
     scenarios: Iterable[str] | None = None,
     methods: Iterable[str] | None = None,
     config: str | SceneConfig | None = None,
     progress: Callable[[str], None] | None = None,
+    variants: dict[str, dict[str, Any]] | None = None,
 ) -> dict[str, dict[str, dict[str, float]]]:
-    """Run scenarios × proxy methods; returns ``{scenario: {method: figures}}``."""
+    """Run scenarios × proxy variants; returns ``{scenario: {variant: figures}}``.
+
+    Args:
+        scenarios: names from :data:`SCENARIOS` (default all).
+        methods: labels from ``variants`` (default all of them).
+        config: the base scene.
+        progress: called with "scenario / variant" before each run.
+        variants: label → proxy section overrides (default :data:`METHODS`).
+    """
     base = load_config(config)
+    table = METHODS if variants is None else variants
     results: dict[str, dict[str, dict[str, float]]] = {}
     for name in scenarios or SCENARIOS:
         scenario, _ = SCENARIOS[name]
         results[name] = {}
-        for label in methods or METHODS:
+        for label in methods or table:
             if progress:
                 progress(f"{name} / {label}")
-            results[name][label] = scenario(base.replace(proxy=METHODS[label]))
+            results[name][label] = scenario(base.replace(proxy=table[label]))
     return results
 
 

@@ -10,11 +10,11 @@ real fingertip. One camera frame:
    motion of all continuing contacts' centroids is the hand's turn this frame. A
    round fingertip's own rotation cannot be seen in the mask; without this estimate
    its points would counter-rotate against a turning object and roll on it.
-3. *Continuing contact.* The previous points are moved by the contact's centroid
-   displacement and, with the estimate on, turned about the centroid by the hand's
-   turn. The current contour is resampled starting from the predicted first point
-   (``proxy.predicted_resampling``), so points do not jitter along the contour and
-   pull against each other. The windowed sum-of-squared-distances match
+3. *Continuing contact.* The previous points are predicted: moved by the contact's
+   centroid displacement and, with the estimate on, turned about the centroid by the
+   hand's turn. With ``proxy.predicted_resampling`` the current contour is resampled
+   starting from the predicted first point, so points do not jitter along the
+   contour and pull against each other. The windowed sum-of-squared-distances match
    (:func:`graspenv.contacts.matching.correspond`) then gives each current point its
    predecessor, whose particle it reuses; current points without one get a new
    particle put down beside the first neighbouring point that is not new; previous
@@ -26,8 +26,9 @@ real fingertip. One camera frame:
    particle is below the object's top is lifted onto the top face, instead of
    pressing the side ever harder.
 
-With ``track_hand_rotation`` and ``predicted_resampling`` off this is the paper's
-plain form: the raw previous contour matched against the tracker's contour.
+With ``track_hand_rotation`` and ``predicted_resampling`` both off this is the
+paper's plain form: the raw previous contour matched against the tracker's contour
+(with either on, the predicted points are matched).
 """
 
 from __future__ import annotations
@@ -136,7 +137,9 @@ class PersistentProxies:
 
     def _follow(self, track: _Track, contact: Contact, turn: float) -> _Track:
         proxy = self._proxy
-        if proxy.track_hand_rotation:
+        if proxy.track_hand_rotation or proxy.predicted_resampling:
+            # Where last frame's points should be now: carried by the contact's
+            # centroid and turned by the hand's turn (0 when that estimate is off).
             predicted = rotate(track.points - track.centroid, turn) + contact.centroid
         else:
             predicted = track.points

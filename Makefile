@@ -18,8 +18,10 @@ $(VENV)/.runtime: pyproject.toml | $(VENV)/bin/python
 	$(PIP) -e .
 	touch $@
 
+# The tests check the environments with stable-baselines3 too, so they need the
+# training extra (with the CPU torch pinned above).
 $(VENV)/.dev: pyproject.toml $(VENV)/.runtime
-	$(PIP) -e '.[dev]'
+	$(PIP) $(TORCH) -e '.[dev,train]'
 	touch $@
 
 $(VENV)/.train: pyproject.toml $(VENV)/.runtime

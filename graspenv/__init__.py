@@ -13,8 +13,37 @@ if TYPE_CHECKING:
 
 __version__ = "0.1.0"
 
-# Environment ids are registered here once the environment suite lands.
-ENV_IDS: tuple[str, ...] = ()
+#: The registered environment ids (``gym.make(id)``), one per task.
+ENV_IDS: tuple[str, ...] = (
+    "graspenv/SqueezeHold-v0",
+    "graspenv/TurnInPlace-v0",
+    "graspenv/SqueezeSlide-v0",
+    "graspenv/SidePush-v0",
+    "graspenv/TopRub-v0",
+    "graspenv/CatchBall-v0",
+)
+
+
+def _register() -> None:
+    # Registration needs no PyBullet: the entry point is a string, imported by
+    # gym.make; the episode lengths live beside the environment class.
+    import gymnasium as gym
+
+    from graspenv.envs.steps import EPISODE_STEPS
+
+    for env_id in ENV_IDS:
+        if env_id in gym.registry:
+            continue
+        task = env_id.split("/")[1].split("-")[0]
+        gym.register(
+            id=env_id,
+            entry_point="graspenv.envs.grasp_env:make_grasp_env",
+            kwargs={"task": task},
+            max_episode_steps=EPISODE_STEPS[task],
+        )
+
+
+_register()
 
 
 def make_simulation(

@@ -128,10 +128,26 @@ def _add_replay(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=_replay)
 
 
+def _gallery(args: argparse.Namespace) -> int:
+    import graspenv
+    from graspenv.envs.gallery import gallery
+
+    print(f"wrote {gallery(graspenv.ENV_IDS, Path(args.out), args.seed)}")
+    return 0
+
+
+def _add_gallery(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("gallery", help="a picture of every environment (PNG)")
+    p.add_argument("--out", default="runs/gallery.png", help="PNG file to write")
+    p.add_argument("--seed", type=int, default=0, help="episode seed")
+    p.set_defaults(run=_gallery)
+
+
 _COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
     _add_demo,
     _add_interactions,
     _add_replay,
+    _add_gallery,
 )
 
 

@@ -19,9 +19,10 @@ import typing
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, TypeVar
 
 __all__ = [
+    "FIDELITY_PRESETS",
     "ConfigError",
     "ContactConfig",
     "ObjectConfig",
@@ -29,12 +30,18 @@ __all__ = [
     "ProxyConfig",
     "SceneConfig",
     "SurfaceConfig",
+    "build_section",
     "load_config",
+    "read_config_file",
+    "scene_from",
 ]
 
 ShapeName = Literal["box", "sphere", "cylinder"]
 ProxyName = Literal["persistent", "instant", "rigid"]
 MatcherName = Literal["auto", "fast", "exhaustive"]
+
+
+T = TypeVar("T")
 
 
 class ConfigError(ValueError):
@@ -279,6 +286,15 @@ class SceneConfig:
         return _build(SceneConfig, _merge(to_dict(self), sections), "scene", "<overrides>")
 
 
+#: Fidelity presets: section overrides from the cheapest to the most faithful.
+#: Provisional until the speed-against-error benchmark picks them from its frontier.
+FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
+    "fast": {"physics": {"substeps": 2}, "contacts": {"spacing": 0.005}},
+    "default": {},
+    "reference": {"physics": {"substeps": 8}, "contacts": {"spacing": 0.003}},
+}
+
+
 def to_dict(config: Any) -> Any:
     """Plain dicts, lists and scalars of a configuration (for run folders and JSON)."""
     if dataclasses.is_dataclass(config) and not isinstance(config, type):
@@ -286,6 +302,47 @@ def to_dict(config: Any) -> Any:
     if isinstance(config, tuple | list):
         return [to_dict(v) for v in config]
     return config
+
+
+def read_config_file(path: str | Path) -> dict[str, Any]:
+    """The tables of a ``.toml`` or ``.json`` configuration file.
+
+    Raises:
+        FileNotFoundError: no such file.
+        ConfigError: the file cannot be parsed (naming the file).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"configuration file not found: {path}")
+    text = path.read_text()
+    try:
+        data: dict[str, Any] = json.loads(text) if path.suffix == ".json" else tomllib.loads(text)
+    except (json.JSONDecodeError, tomllib.TOMLDecodeError) as err:
+        raise ConfigError(f"{path}: cannot parse: {err}") from err
+    return data
+
+
+def build_section(
+    cls: type[T], data: Mapping[str, Any] | None, prefix: str, source: str, defaults: T
+) -> T:
+    """A configuration dataclass from a table merged over defaults, validated.
+
+    Args:
+        cls: the dataclass.
+        data: the table's keys (may be None or empty).
+        prefix: the table's name in error messages (e.g. ``task``).
+        source: the file (or ``<dict>``) in error messages.
+        defaults: the instance whose values fill missing keys.
+    """
+    merged = _merge(to_dict(defaults), dict(data or {}))
+    result: T = _build(cls, merged, prefix, source)
+    return result
+
+
+def scene_from(data: Mapping[str, Any], source: str) -> SceneConfig:
+    """A :class:`SceneConfig` from the scene tables of a file, errors naming it."""
+    result: SceneConfig = _build(SceneConfig, data, "", source)
+    return result
 
 
 def load_config(
@@ -314,15 +371,8 @@ def load_config(
     elif isinstance(config, Mapping):
         data = dict(config)
     else:
-        path = Path(config)
-        source = str(path)
-        if not path.is_file():
-            raise FileNotFoundError(f"configuration file not found: {path}")
-        text = path.read_text()
-        try:
-            data = json.loads(text) if path.suffix == ".json" else tomllib.loads(text)
-        except (json.JSONDecodeError, tomllib.TOMLDecodeError) as err:
-            raise ConfigError(f"{path}: cannot parse: {err}") from err
+        source = str(config)
+        data = read_config_file(config)
     if overrides:
         data = _merge(data, overrides)
     return _build(SceneConfig, data, "", source)
@@ -362,7 +412,7 @@ def _build(cls: type, data: Any, prefix: str, source: str) -> Any:
         kwargs[name] = _convert(hints[name], value, key, source)
     try:
         return cls(**kwargs)
-    except ConfigError as err:
+    except (ConfigError, ValueError) as err:
         raise ConfigError(f"{source}: {err}") from None
     except TypeError as err:  # a required key is missing
         raise ConfigError(f"{source}: '{prefix or 'scene'}': {err}") from None

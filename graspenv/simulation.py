@@ -15,13 +15,13 @@ from types import TracebackType
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from graspenv.config import SceneConfig, load_config
 from graspenv.contacts.extract import validate_mask
 from graspenv.contacts.tracking import ContactFrame, ContactTracker
-from graspenv.physics.world import PhysicsWorld
-from graspenv.proxies import make_proxies
+from graspenv.physics.world import ContactReport, PhysicsWorld
+from graspenv.proxies import PersistentProxies, RigidProxies, make_proxies
 from graspenv.proxies.base import ProxyCommand
 from graspenv.surface.geometry import Surface
 
@@ -78,6 +78,12 @@ class Simulation:
         surface: the table's geometry and world ↔ pixel transforms.
     """
 
+    #: Default camera of :meth:`render_view`: yaw and pitch in degrees, and the
+    #: distance as a multiple of the table's longer side (all of it in view at 50°).
+    VIEW_YAW_DEG = 0.0
+    VIEW_PITCH_DEG = -50.0
+    VIEW_DISTANCE_PER_SIZE = 1.2
+
     def __init__(self, config: SceneConfig) -> None:
         self.config = config
         self.surface = Surface.from_config(config.surface)
@@ -85,6 +91,7 @@ class Simulation:
         self._world = PhysicsWorld(config)
         self._proxies = make_proxies(self._world, config, self.surface)
         self._index = 0
+        self._contacts: ContactFrame | None = None
 
     # -- the pipeline ------------------------------------------------------------------
 
@@ -106,6 +113,7 @@ class Simulation:
         image = validate_mask(mask, self.surface.shape)
         contacts = self._tracker.update(image)
         t1 = clock()
+        self._contacts = contacts
         command = self._proxies.update(contacts, image)
         t2 = clock()
         if command.bodies.size:
@@ -154,17 +162,147 @@ class Simulation:
         return self._world.object_velocity(name)
 
     def particle_positions(self) -> NDArray[np.float64]:
-        """Centres of the active particles, metres, world frame, shape (N, 3)."""
+        """Centres of the active particles, metres, world frame, shape (N, 3).
+
+        Rows in increasing particle id (``world.pool.active_ids``).
+        """
         return self._world.pool.positions(self._world.pool.active_ids)
+
+    def particle_velocities(self) -> NDArray[np.float64]:
+        """Linear velocities of the active particles, m/s, world frame, shape (N, 3).
+
+        Rows in the order of :meth:`particle_positions`.
+        """
+        return self._world.pool.velocities(self._world.pool.active_ids)
+
+    def contact_report(self, name: str) -> ContactReport:
+        """Contacts on an object from the last physics sub-step (points, normals, forces).
+
+        See :meth:`graspenv.physics.world.PhysicsWorld.contact_report`.
+        """
+        return self._world.contact_report(name)
+
+    def particles_by_contact(self) -> dict[int, NDArray[np.int64]]:
+        """Contact id → the particle ids that stand for it after the last frame.
+
+        With the ``persistent`` method, every particle of every stack of each tracked
+        contact (:meth:`PersistentProxies.particle_contacts`); with ``rigid``, each
+        current contact maps to an empty array (its proxy is one body, not
+        particles); with ``instant``, particles are not tied to contacts and the
+        dict is empty. Empty before the first frame.
+
+        Returns:
+            Contact id → particle ids, int64, shape (n,).
+        """
+        if isinstance(self._proxies, PersistentProxies):
+            return self._proxies.particle_contacts()
+        if isinstance(self._proxies, RigidProxies) and self._contacts is not None:
+            return {c.id: np.zeros(0, np.int64) for c in self._contacts.contacts}
+        return {}
+
+    # -- disturbances and initial states -----------------------------------------------
+
+    def apply_force(self, name: str, force: ArrayLike) -> None:
+        """Push an object at its centre with ``force`` (N, world frame, (3,)) for the
+        next :meth:`step` only (every physics sub-step of that camera frame).
+
+        See :meth:`graspenv.physics.world.PhysicsWorld.apply_force`.
+        """
+        self._world.apply_force(name, force)
+
+    def set_object_state(
+        self,
+        name: str,
+        position: ArrayLike | None = None,
+        yaw: float | None = None,
+        linear_velocity: ArrayLike | None = None,
+        angular_velocity: ArrayLike | None = None,
+        *,
+        rolling: bool = False,
+    ) -> None:
+        """Move an object and/or set its velocity now; ``None`` keeps the current value.
+
+        Position in metres ((3,), or (x, y) to rest it on the table), yaw in
+        radians, velocities in m/s and rad/s, all world frame; ``rolling=True``
+        spins a sphere to roll at its linear velocity. See
+        :meth:`graspenv.physics.world.PhysicsWorld.set_object_state`.
+        """
+        self._world.set_object_state(
+            name, position, yaw, linear_velocity, angular_velocity, rolling=rolling
+        )
+
+    # -- pictures ----------------------------------------------------------------------
+
+    def render_view(
+        self,
+        width: int = 320,
+        height: int = 240,
+        target: ArrayLike | None = None,
+        distance: float | None = None,
+        yaw_deg: float | None = None,
+        pitch_deg: float | None = None,
+        fov: float = 50.0,
+    ) -> NDArray[np.uint8]:
+        """A 3-D view of the table, objects and fingers' particles (RGB, headless).
+
+        By default the camera looks at the table centre from the viewer's side of
+        the table (looking along +y), 50° down, from 1.2 times the table's longer
+        side away, so the whole table is in view.
+
+        Args:
+            width: image width, pixels.
+            height: image height, pixels.
+            target: point looked at, metres, world frame, (3,); table centre if None.
+            distance: camera distance from the target, metres.
+            yaw_deg: camera yaw, degrees (0: looking along +y, x to the right).
+            pitch_deg: camera pitch, degrees (negative: looking down).
+            fov: vertical field of view, degrees.
+
+        Returns:
+            RGB image, shape (height, width, 3), uint8.
+        """
+        return self._world.render(
+            width,
+            height,
+            (0.0, 0.0, 0.0) if target is None else target,
+            self.VIEW_DISTANCE_PER_SIZE * max(self.surface.size) if distance is None else distance,
+            self.VIEW_YAW_DEG if yaw_deg is None else yaw_deg,
+            self.VIEW_PITCH_DEG if pitch_deg is None else pitch_deg,
+            fov,
+        )
 
     # -- life cycle --------------------------------------------------------------------
 
-    def reset(self) -> None:
-        """Back to the initial scene: objects at their start, no contacts."""
-        self._world.reset()
-        self._tracker.reset()
-        self._proxies.reset()
+    def reset(self, scene: SceneConfig | None = None) -> None:
+        """Start again: objects at their start, no contacts, frame index 0.
+
+        Args:
+            scene: the scene for the new episode (objects may differ in number,
+                shape, size, mass and friction; any section may change), or ``None``
+                to put the current one back. With a scene, the physics world is
+                rebuilt (:meth:`PhysicsWorld.rebuild`: 12–30 ms with the default
+                pool batch), and so are the contact tracker and the proxies; the
+                results are then bit-identical to a new ``Simulation(scene)`` fed the
+                same masks, whatever ran before, also when the scene equals
+                :attr:`config`. :attr:`surface` is replaced only when the surface
+                section differs, so a reference to it stays valid otherwise. Without
+                a scene this is the cheap :meth:`PhysicsWorld.reset` (0.05 ms), which
+                is bit-identical to a fresh start in the common cases but not
+                guaranteed to be (see there).
+        """
         self._index = 0
+        self._contacts = None
+        if scene is None:
+            self._world.reset()
+            self._tracker.reset()
+            self._proxies.reset()
+            return
+        if scene.surface != self.config.surface:
+            self.surface = Surface.from_config(scene.surface)
+        self._world.rebuild(scene)
+        self._tracker = ContactTracker(self.surface, scene.contacts)
+        self._proxies = make_proxies(self._world, scene, self.surface)
+        self.config = scene
 
     def close(self) -> None:
         """Free the physics client; safe to call twice."""

@@ -13,9 +13,8 @@ def test_default_file_matches_built_in_default() -> None:
     assert load_config(CONFIGS / "default.toml") == load_config(None) == SceneConfig()
 
 
-@pytest.mark.parametrize("path", sorted(CONFIGS.glob("*.toml")), ids=lambda p: p.name)
-def test_every_shipped_file_loads(path: Path) -> None:
-    assert isinstance(load_config(path), SceneConfig)
+def test_the_default_scene_file_loads() -> None:
+    assert isinstance(load_config(CONFIGS / "default.toml"), SceneConfig)
 
 
 def test_dict_round_trip() -> None:

@@ -145,3 +145,126 @@ def test_config_overrides_reach_the_simulation(tmp_path) -> None:  # type: ignor
         assert sim.surface.resolution == (320, 240)
         assert sim.config.proxy.stack_layers == 3
         assert sim.step(np.zeros((240, 320), np.uint8)).n_particles == 0
+
+
+# -- per-episode scenes, disturbances, 3-D views and contact bookkeeping ---------------
+
+# Another episode's objects: a taller, heavier, grippier box and a ball beside it.
+OTHER_OBJECTS = [
+    {"name": "box", "shape": "box", "size": [0.06, 0.05, 0.04], "mass": 0.3, "friction": 0.7},
+    {"name": "ball", "shape": "sphere", "size": [0.015], "position": [0.12, 0.1]},
+]
+
+
+def _run(sim: Simulation, masks: list[np.ndarray]) -> np.ndarray:
+    for mask in masks:
+        sim.step(mask)
+    poses = [np.concatenate(sim.object_pose(name)) for name in sim.object_names]
+    return np.concatenate([*poses, sim.particle_positions().ravel()])
+
+
+def test_reset_to_another_scene_matches_a_new_simulation() -> None:
+    scene = graspenv.load_config(None, objects=OTHER_OBJECTS, proxy={"stack_layers": 2})
+    with Simulation(scene) as fresh:
+        masks = _pinch_masks(fresh)
+        expected = _run(fresh, masks)
+    # The episode before used another proxy method and other objects.
+    with graspenv.make_simulation(proxy={"method": "rigid"}) as sim:
+        surface = sim.surface
+        _run(sim, masks[:30])
+        sim.reset(scene)
+        assert sim.config == scene and sim.frame_index == 0
+        assert sim.object_names == ("box", "ball")
+        assert sim.surface is surface  # same surface section: kept
+        assert _run(sim, masks).tobytes() == expected.tobytes()
+        sim.reset()  # and the plain reset now restores the new scene
+        assert _run(sim, masks).tobytes() == expected.tobytes()
+
+
+def test_reset_to_the_same_scene_rebuilds_it_bit_for_bit() -> None:
+    # A turned box squeezed by particles: the case in which the cheap reset (no
+    # scene) is not bit-identical to a fresh start.
+    objects = [{"name": "box", "shape": "box", "size": [0.06, 0.05, 0.03], "yaw": 0.6}]
+    scene = graspenv.load_config(None, objects=objects)
+    with Simulation(scene) as fresh:
+        masks = _pinch_masks(fresh, 30)
+        expected = _run(fresh, masks)
+    with Simulation(scene) as sim:
+        _run(sim, masks)
+        sim.reset(sim.config)
+        assert _run(sim, masks).tobytes() == expected.tobytes()
+
+
+def test_reset_with_another_surface_replaces_the_surface() -> None:
+    with graspenv.make_simulation() as sim:
+        scene = graspenv.load_config(None, surface={"resolution": [320, 240], "fps": 30.0})
+        sim.reset(scene)
+        assert sim.surface.resolution == (320, 240) and sim.surface.fps == 30.0
+        assert sim.world.frame_dt == pytest.approx(1 / 30)
+        assert sim.step(np.zeros((240, 320), np.uint8)).n_particles == 0
+        with pytest.raises(ValueError, match=r"\(240, 320\)"):
+            sim.step(np.zeros((480, 640), np.uint8))
+
+
+def test_set_object_state_and_apply_force_pass_through() -> None:
+    ball = {"name": "ball", "shape": "sphere", "size": [0.02], "mass": 0.1}
+    with graspenv.make_simulation(objects=[ball]) as sim:
+        empty = np.zeros(sim.surface.shape, np.uint8)
+        sim.set_object_state(
+            "ball", position=[-0.1, 0.0], linear_velocity=[0.2, 0, 0], rolling=True
+        )
+        sim.step(empty)
+        linear, angular = sim.object_velocity("ball")
+        assert linear[0] == pytest.approx(0.2, rel=1e-3)  # rolls on without slowing
+        assert angular[1] == pytest.approx(0.2 / 0.02, rel=1e-3)
+        sim.apply_force("ball", [0.0, 0.6, 0.0])  # for the next frame only
+        sim.step(empty)
+        pushed, _ = sim.object_velocity("ball")
+        # A free push would give F·Δt/m = 0.1 m/s; the table's friction spins the ball
+        # up and takes 2/7 of it (a solid sphere that starts rolling).
+        assert 0.05 < pushed[1] < 0.1
+        sim.step(empty)
+        coasting, _ = sim.object_velocity("ball")
+        assert coasting[1] == pytest.approx(pushed[1], rel=0.3)
+        assert sim.object_pose("ball")[0][0] > -0.1 + 0.2 * 2 / 60 * 0.9
+
+
+def test_render_view_shows_the_box_on_the_table() -> None:
+    with graspenv.make_simulation() as sim:
+        image = sim.render_view()
+        assert image.shape == (240, 320, 3) and image.dtype == np.uint8
+        # The default camera looks at the table centre, where the box is.
+        box = image[118:123, 158:163].reshape(-1, 3).mean(axis=0)
+        table = image[150:155, 58:63].reshape(-1, 3).mean(axis=0)
+        assert np.abs(box - table).sum() > 60
+        small = sim.render_view(64, 48, target=(0.0, 0.0, 0.015), distance=0.3, pitch_deg=-30)
+        assert small.shape == (48, 64, 3)
+
+
+@pytest.mark.parametrize("method", ["persistent", "instant", "rigid"])
+def test_particles_by_contact_and_particle_velocities(method: str) -> None:
+    with graspenv.make_simulation(proxy={"method": method, "stack_layers": 2}) as sim:
+        assert sim.particles_by_contact() == {}
+        for mask in _pinch_masks(sim, 30):
+            report = sim.step(mask)
+        groups = sim.particles_by_contact()
+        positions, velocities = sim.particle_positions(), sim.particle_velocities()
+        assert velocities.shape == positions.shape
+        assert np.all(np.isfinite(velocities))
+        contacts = sim.contact_report("box")
+        if method == "instant":
+            assert groups == {}
+            return
+        assert set(groups) == set(report.contacts.ids) and len(groups) == 2
+        if method == "rigid":
+            assert all(ids.size == 0 and ids.dtype == np.int64 for ids in groups.values())
+            return
+        every = np.concatenate(list(groups.values()))
+        np.testing.assert_array_equal(np.sort(every), sim.world.pool.active_ids)
+        # Per-finger forces: both fingers squeeze the box.
+        touching = contacts.particle >= 0
+        assert np.all(np.isin(contacts.particle[touching], every))
+        per_finger = [
+            contacts.normal_force[np.isin(contacts.particle, ids)].sum() for ids in groups.values()
+        ]
+        assert min(per_finger) > 0.1

@@ -15,6 +15,12 @@ sphere proxies. The proxies stage drives it once per camera frame:
    rotation rate about z; it returns the particles' positions after the frame.
 
 Grasp metrics read ``world.contact_report(name)``.
+
+Between episodes ``world.reset()`` puts the same scene back and
+``world.rebuild(scene)`` replaces it (bit-identical to ``PhysicsWorld(scene)``).
+``world.apply_force(name, force)`` pushes an object for the next frame,
+``world.set_object_state(...)`` teleports or launches one, and
+``world.render(...)`` draws a headless 3-D view (:mod:`graspenv.physics.view`).
 """
 
 from __future__ import annotations

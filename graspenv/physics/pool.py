@@ -22,6 +22,8 @@ import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
 
 from graspenv.config import PhysicsConfig, ProxyConfig
+from graspenv.physics.meshes import mesh_visual_shape
+from graspenv.physics.view import PARTICLE_RGBA, icosahedron
 
 __all__ = ["OBJECT_GROUP", "PARTICLE_GROUP", "STATIC_GROUP", "ParticlePool"]
 
@@ -87,6 +89,10 @@ class ParticlePool:
         self._shape = pb.createCollisionShape(
             pb.GEOM_SPHERE, radius=self.radius, physicsClientId=client
         )
+        # Only seen in rendered views; the renderer draws parked particles too, so a
+        # 20-triangle shape keeps a large pool from slowing every image.
+        vertices, indices = icosahedron(self.radius)
+        self._visual = mesh_visual_shape(client, vertices, indices, PARTICLE_RGBA)
         self._bodies = np.zeros(0, dtype=np.int64)
         self._active = np.zeros(0, dtype=bool)
         # Where each particle was told to be at the end of the previous frame, world
@@ -340,7 +346,7 @@ class ParticlePool:
             created = pb.createMultiBody(
                 baseMass=_CREATION_MASS,
                 baseCollisionShapeIndex=self._shape,
-                baseVisualShapeIndex=-1,
+                baseVisualShapeIndex=self._visual,
                 batchPositions=park.tolist(),
                 useMaximalCoordinates=True,
                 physicsClientId=self._client,

@@ -17,7 +17,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from graspenv.config import PhysicsConfig, ProxyConfig
 from graspenv.geometry import yaw_of
+from graspenv.physics.meshes import mesh_collision_shape
 from graspenv.physics.pool import OBJECT_GROUP, PARTICLE_GROUP
+from graspenv.physics.view import RIGID_PROXY_RGBA
 
 __all__ = ["RigidBodies"]
 
@@ -62,7 +64,9 @@ class RigidBodies:
             [np.column_stack([outline, np.full(len(outline), z)]) for z in (-half, half)]
         )
         c = self._client
-        shape = pb.createCollisionShape(pb.GEOM_MESH, vertices=vertices.tolist(), physicsClientId=c)
+        # Bullet keeps each mesh shape (about 6 KB) until the world is rebuilt:
+        # removeCollisionShape refuses a shape a removed body once used.
+        shape = mesh_collision_shape(c, vertices)
         mass = self._proxy.particle_mass * len(outline)
         body = pb.createMultiBody(mass, shape, -1, [xy[0], xy[1], half + _HOVER], physicsClientId=c)
         pb.changeDynamics(
@@ -77,6 +81,8 @@ class RigidBodies:
         )
         # Objects only: the drive holds the height, the table would only add drag.
         pb.setCollisionFilterGroupMask(body, -1, PARTICLE_GROUP, OBJECT_GROUP, physicsClientId=c)
+        # Drawn from its collision shape (white) unless given a colour.
+        pb.changeVisualShape(body, -1, rgbaColor=RIGID_PROXY_RGBA, physicsClientId=c)
         handle = self._next
         self._next += 1
         self._bodies[handle] = body

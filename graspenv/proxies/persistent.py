@@ -91,6 +91,19 @@ class PersistentProxies:
         self._tracks = {}
         self.hand_turn = 0.0
 
+    def particle_contacts(self) -> dict[int, NDArray[np.int64]]:
+        """Which particles belong to which contact after the last frame.
+
+        For per-finger measurements: match the ``particle`` column of
+        :meth:`~graspenv.physics.world.PhysicsWorld.contact_report` against these.
+
+        Returns:
+            Contact id → its particle ids (every stack layer: points in contour
+            order, the layers of each point bottom first), shape (N·L,); contacts in
+            the order of the last frame. Copies: safe to keep.
+        """
+        return {cid: track.particles.reshape(-1).copy() for cid, track in self._tracks.items()}
+
     def update(self, frame: ContactFrame, mask: NDArray[np.uint8]) -> ProxyCommand:
         """Bookkeeping for one frame; ``mask`` is not needed by this method."""
         del mask

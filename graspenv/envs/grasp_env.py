@@ -1,0 +1,477 @@
+"""GraspEnv: one Gymnasium environment class for every grasp task.
+
+The environment is orchestration only. One step, in order: the finger controller
+turns the action into the hand's motion; for each camera frame of the step the task
+may push the object (a disturbance), the hand is rendered into a contact mask, the
+mask goes through the whole pipeline (:class:`graspenv.simulation.Simulation`), and
+the hand advances; then grasp metrics are measured and the task gives the reward,
+success and termination.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any, Literal
+
+import cv2
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from graspenv.config import (
+    FIDELITY_PRESETS,
+    ConfigError,
+    SceneConfig,
+    build_section,
+    read_config_file,
+    scene_from,
+)
+from graspenv.demo import footprint
+from graspenv.geometry import yaw_of
+from graspenv.simulation import Simulation
+from graspenv.surface.controller import ActionMode, ControllerConfig, FingerController
+from graspenv.surface.render import render_mask
+from graspenv.tasks.base import EpisodeState, RewardConfig, Task, TaskConfig
+from graspenv.tasks.metrics import GraspMetrics, grasp_metrics
+from graspenv.viz import draw_mask, draw_points, draw_polyline, id_colour
+
+__all__ = ["GoalGraspEnv", "GraspEnv", "load_env_config", "make_grasp_env"]
+
+ObsMode = Literal["state", "mask", "goal"]
+MASK_SHAPE = (72, 96)  # rows, columns: the table's 4:3 aspect, every 6.7 camera pixels
+# Scales that bring the observation's forces near unit size.
+FORCE_SCALE = 10.0
+# Every vector entry is clipped to ±BOUND (SI units; nothing physical comes near it,
+# but finite bounds keep the space well defined for the checkers and for agents).
+BOUND = 100.0
+
+
+def load_env_config(
+    task: type[Task], config: str | Path | Mapping[str, Any] | None
+) -> tuple[SceneConfig, TaskConfig, ControllerConfig, RewardConfig]:
+    """Split an environment configuration into its scene and task parts.
+
+    The file (TOML or JSON, e.g. ``envs_configs/turn_in_place.toml``) or dict holds
+    the scene tables (``surface``, ``contacts``, ``proxy``, ``physics``; the object
+    is drawn per episode by the task) and ``task``, ``controller`` and ``reward``
+    tables; each missing table or key takes the task's built-in default.
+
+    Raises:
+        ConfigError: unknown keys or bad values, naming the key and the file.
+        FileNotFoundError: the file does not exist.
+    """
+    if config is None:
+        data: dict[str, Any] = {}
+        source = "<default>"
+    elif isinstance(config, Mapping):
+        data = dict(config)
+        source = "<dict>"
+    else:
+        data = read_config_file(config)
+        source = str(config)
+    if "objects" in data:
+        raise ConfigError(
+            f"{source}: 'objects' is drawn per episode by the task; set the ranges in "
+            "the 'task' table instead"
+        )
+    return (
+        scene_from({k: v for k, v in data.items() if k not in _TASK_TABLES}, source),
+        build_section(TaskConfig, data.get("task"), "task", source, task.default_config),
+        build_section(
+            ControllerConfig, data.get("controller"), "controller", source, task.default_controller
+        ),
+        build_section(RewardConfig, data.get("reward"), "reward", source, task.default_reward),
+    )
+
+
+_TASK_TABLES = ("task", "controller", "reward")
+
+
+class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
+    """A grasp task on an imaging touch table, through the whole particle pipeline.
+
+    ## Action Space
+
+    ``action_mode="grip"``: ``Box(-1, 1, (5,))``: grip centre velocity (x, y) in units
+    of ``controller.max_speed``, turn rate (``max_turn_rate``), opening rate
+    (``max_open_rate``) and touch (fingers down when > 0). ``action_mode="fingers"``:
+    ``Box(-1, 1, (3·n,))``: per finger a planar velocity and a touch flag. Actions are
+    held for ``task.frame_skip`` camera frames. Out-of-range values are clipped; NaN
+    or infinite ones raise ``ValueError``. Actions only move the synthetic hand; they
+    reach the physics through the rendered contact mask.
+
+    ## Observation Space
+
+    ``obs_mode="state"``: a float32 vector: object position (3, m), quaternion (4,
+    x y z w), linear (3, m/s) and angular (3, rad/s) velocity, finger positions (2·n,
+    m), touch flags (n), the goal (3: x, y in m and yaw in rad; CatchBall: the
+    desired planar velocity), per-finger normal force on the object (n, in units of
+    10 N), per-finger particle contact count (n, in units of 10) and slip (1, m/s).
+    ``"mask"``: a Dict with ``mask``, the contact mask downsampled to 72 × 96 × 1
+    uint8, and ``state``, the vector above. ``"goal"``: Gymnasium-Robotics' Dict
+    (``observation`` without the goal, ``achieved_goal``, ``desired_goal``) with a
+    vectorised :meth:`compute_reward` for hindsight relabelling.
+
+    ## Rewards
+
+    Per step, with weights from the ``reward`` table: ``−position·‖Δxy‖ −
+    yaw·|Δyaw| + success·[success]`` (task progress; yaw only for tasks with a yaw
+    goal) plus the grasp-stability term ``−slip·slip − tilt·tilt + grip·[firm]``,
+    where firm means force closure with a grip force in ``[grip_min, grip_max]``.
+    ``goal_reward(achieved, desired, info)`` gives the same value for batches (and
+    is ``compute_reward`` in goal mode).
+
+    ## Starting State
+
+    The object (shape, size, mass, friction within the ``task`` ranges), its start
+    and the goal are drawn from the seed; the hand starts as the task places it
+    (lifted either side of the object for the grip tasks).
+
+    ## Episode End
+
+    Terminated on success (SqueezeHold: when the hold period ends; CatchBall: also
+    when the ball leaves the table) or when the object falls off the table.
+    Truncated by ``max_episode_steps`` from the registration.
+
+    ## Arguments
+
+    ``task`` (name or Task), ``proxy`` (``persistent``, ``instant`` or ``rigid``),
+    ``obs_mode``, ``action_mode`` (default: the task's), ``render_mode``
+    (``rgb_array``: top-down picture; ``rgb_array_3d``: PyBullet's software camera),
+    ``config`` (an environment file or dict), ``fidelity`` (``fast``, ``default``,
+    ``reference``).
+
+    ## Version History
+
+    - v0: first release.
+    """
+
+    metadata: dict[str, Any] = {  # noqa: RUF012  (Gymnasium's own convention)
+        "render_modes": ["rgb_array", "rgb_array_3d"],
+        "render_fps": 30,
+    }
+
+    def __init__(
+        self,
+        task: str | Task = "TurnInPlace",
+        proxy: str | None = None,
+        obs_mode: ObsMode = "state",
+        action_mode: ActionMode | None = None,
+        render_mode: str | None = None,
+        config: str | Path | Mapping[str, Any] | None = None,
+        fidelity: str = "default",
+    ) -> None:
+        from graspenv.tasks.library import TASKS
+
+        if isinstance(task, str):
+            if task not in TASKS:
+                raise ValueError(f"unknown task {task!r}; expected one of {list(TASKS)}")
+            task_cls: type[Task] = TASKS[task]
+        else:
+            task_cls = type(task)
+        if obs_mode not in ("state", "mask", "goal"):
+            raise ValueError(f"obs_mode must be 'state', 'mask' or 'goal', got {obs_mode!r}")
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(
+                f"render_mode must be one of {self.metadata['render_modes']} or None, "
+                f"got {render_mode!r}"
+            )
+        if fidelity not in FIDELITY_PRESETS:
+            raise ValueError(f"fidelity must be one of {list(FIDELITY_PRESETS)}, got {fidelity!r}")
+        scene, task_config, controller_config, reward_config = load_env_config(task_cls, config)
+        sections: dict[str, Any] = dict(FIDELITY_PRESETS[fidelity])
+        if proxy is not None:
+            sections["proxy"] = {"method": proxy}
+        self._base_scene = scene.replace(**sections) if sections else scene
+        self.task: Task = task if isinstance(task, Task) else task_cls(task_config, reward_config)
+        self.obs_mode: ObsMode = obs_mode
+        self.render_mode = render_mode
+        mode = action_mode or self.task.default_action_mode
+        if mode not in ("fingers", "grip"):
+            raise ValueError(f"action_mode must be 'fingers' or 'grip', got {mode!r}")
+        self.action_mode: ActionMode = mode
+
+        self._sim = Simulation(self._base_scene)
+        self.controller = FingerController(controller_config, self._sim.surface, self.action_mode)
+        n = controller_config.n_fingers
+        self.action_space = spaces.Box(-1.0, 1.0, (self.controller.action_size,), np.float32)
+        state_size = 13 + 5 * n + self.task.goal_size + 1
+        vector = spaces.Box(-BOUND, BOUND, (state_size,), np.float32)
+        if obs_mode == "state":
+            self.observation_space = vector
+        elif obs_mode == "mask":
+            self.observation_space = spaces.Dict(
+                {"mask": spaces.Box(0, 255, (*MASK_SHAPE, 1), np.uint8), "state": vector}
+            )
+        else:
+            goal = spaces.Box(-BOUND, BOUND, (self.task.goal_size,), np.float32)
+            self.observation_space = spaces.Dict(
+                {
+                    "observation": spaces.Box(
+                        -BOUND, BOUND, (state_size - self.task.goal_size,), np.float32
+                    ),
+                    "achieved_goal": goal,
+                    "desired_goal": goal,
+                }
+            )
+        self._goal = np.zeros(self.task.goal_size)
+        self._state: EpisodeState | None = None
+        self._metrics = GraspMetrics.empty()
+        self._finger_force = np.zeros(n)
+        self._finger_contacts = np.zeros(n)
+        self._mask = np.zeros(self._sim.surface.shape, np.uint8)
+        self._yaw_unwrapped = 0.0
+        self._yaw_last = 0.0
+        self._closed = False
+
+    # -- gymnasium API -----------------------------------------------------------------
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[Any, dict[str, Any]]:
+        super().reset(seed=seed)
+        rng = self.np_random
+        task = self.task
+        obj = task.draw_object(rng)
+        self._goal = task.draw_goal(rng, obj)
+        grip = task.start_grip(rng, obj, self._goal)
+        self._sim.reset(task.scene(self._base_scene, obj))
+        initial_velocity = getattr(task, "initial_velocity", None)
+        if initial_velocity is not None:
+            self._sim.set_object_state(
+                task.object_name, linear_velocity=initial_velocity(rng), rolling=True
+            )
+        self.controller.place_grip(grip)
+        self._mask = np.zeros(self._sim.surface.shape, np.uint8)
+        _, q = self._sim.object_pose(task.object_name)
+        self._yaw_unwrapped = self._yaw_last = yaw_of(q)
+        extra: dict[str, Any] = {}
+        if hasattr(task, "disturbance"):
+            heading = rng.uniform(-math.pi, math.pi)
+            extra["force_direction"] = (math.cos(heading), math.sin(heading))
+            extra["force_peak"] = float(rng.uniform(*task.config.force))
+        self._state = self._read_state(step=0, extra=extra)
+        info = self._info(success=False, n_particles=0)
+        return self._observation(), info
+
+    def step(self, action: Any) -> tuple[Any, float, bool, bool, dict[str, Any]]:
+        if self._state is None:
+            raise RuntimeError("call reset() before step()")
+        task, sim = self.task, self._sim
+        action = np.asarray(action, dtype=np.float64)
+        n_particles = 0
+        for _ in range(task.config.frame_skip):
+            self.controller.apply(action)
+            force = task.disturbance(self._state)
+            if force is not None:
+                sim.apply_force(task.object_name, force)
+            self._mask = render_mask(self.controller.hand, sim.surface)
+            n_particles = sim.step(self._mask).n_particles
+            self.controller.advance()
+        self._state = self._read_state(self._state.step + 1, self._state.extra)
+        success = task.is_success(self._state, self._goal)
+        fell = bool(self._state.position[2] < -0.02)
+        terminated = task.is_done(self._state, success) or fell
+        info = self._info(success, n_particles)
+        # From the goals as the observation carries them (float32), so that
+        # compute_reward on observed goals gives back exactly this reward.
+        reward = float(
+            self.goal_reward(
+                info["achieved_goal"].astype(np.float32), self._goal.astype(np.float32), info
+            )
+        )
+        return self._observation(), reward, terminated, False, info
+
+    def goal_reward(
+        self, achieved_goal: NDArray[Any], desired_goal: NDArray[Any], info: Any
+    ) -> NDArray[np.float64] | float:
+        """Reward for (batches of) goals: the step reward, recomputed from goals.
+
+        Args:
+            achieved_goal: shape (goal_size,) or (B, goal_size).
+            desired_goal: same shape.
+            info: the step's info dict, or a sequence (or object array) of B of them.
+        """
+        goal_term = self.task.goal_reward(
+            np.asarray(achieved_goal, dtype=float), np.asarray(desired_goal, dtype=float)
+        )
+        if isinstance(info, Mapping):
+            return goal_term + self.task.stability_reward(info)
+        stability = np.array([self.task.stability_reward(i) for i in np.asarray(info).ravel()])
+        return goal_term + stability.reshape(np.shape(goal_term))
+
+    def render(self) -> NDArray[np.uint8] | None:
+        if self.render_mode == "rgb_array":
+            return self._top_view()
+        if self.render_mode == "rgb_array_3d":
+            return self._sim.render_view()
+        return None
+
+    def close(self) -> None:
+        if not self._closed:
+            self._sim.close()
+            self._closed = True
+        super().close()
+
+    # -- internals ---------------------------------------------------------------------
+
+    def _read_state(self, step: int, extra: dict[str, Any]) -> EpisodeState:
+        sim, name = self._sim, self.task.object_name
+        position, quaternion = sim.object_pose(name)
+        linear, angular = sim.object_velocity(name)
+        now = yaw_of(quaternion)
+        self._yaw_unwrapped += math.remainder(now - self._yaw_last, 2 * math.pi)
+        self._yaw_last = now
+        self._measure(position, quaternion, linear, angular)
+        m = self._metrics
+        return EpisodeState(
+            position=position,
+            yaw=self._yaw_unwrapped,
+            linear_velocity=linear,
+            angular_velocity=angular,
+            tilt=m.tilt,
+            slip=m.slip,
+            grip_force=m.grip_force,
+            force_closure=m.force_closure,
+            step=step,
+            fingers=self.controller.finger_positions(),
+            extra=extra,
+        )
+
+    def _measure(
+        self,
+        position: NDArray[np.float64],
+        quaternion: NDArray[np.float64],
+        linear: NDArray[np.float64],
+        angular: NDArray[np.float64],
+    ) -> None:
+        """Grasp metrics and per-finger forces from the last physics sub-step."""
+        sim, name = self._sim, self.task.object_name
+        report = sim.contact_report(name)
+        particles = report.particle >= 0
+        velocities = sim.world.pool.velocities(report.particle[particles])
+        obj = sim.config.objects[0]
+        self._metrics = grasp_metrics(
+            report,
+            position,
+            quaternion,
+            linear,
+            angular,
+            velocities,
+            mu=obj.friction * sim.config.proxy.particle_friction,
+        )
+        fingers = self.controller.finger_positions()
+        touching = self.controller.touching()
+        force = np.zeros(len(fingers))
+        count = np.zeros(len(fingers))
+        if np.any(particles) and np.any(touching):
+            where = report.position[particles, :2]
+            distance = np.linalg.norm(where[:, None, :] - fingers[None, :, :], axis=2)
+            distance[:, ~touching] = np.inf
+            nearest = np.argmin(distance, axis=1)
+            np.add.at(force, nearest, report.normal_force[particles])
+            np.add.at(count, nearest, 1.0)
+        self._finger_force, self._finger_contacts = force, count
+
+    def _vector(self) -> NDArray[np.float32]:
+        state = self._state
+        assert state is not None
+        _, quaternion = self._sim.object_pose(self.task.object_name)
+        vector = np.concatenate(
+            [
+                state.position,
+                quaternion,
+                state.linear_velocity,
+                state.angular_velocity,
+                state.fingers.ravel(),
+                self.controller.touching().astype(float),
+                self._goal,
+                self._finger_force / FORCE_SCALE,
+                self._finger_contacts / 10.0,
+                [state.slip],
+            ]
+        )
+        return np.clip(vector, -BOUND, BOUND).astype(np.float32)
+
+    def _observation(self) -> Any:
+        vector = self._vector()
+        if self.obs_mode == "state":
+            return vector
+        if self.obs_mode == "mask":
+            small = cv2.resize(self._mask, MASK_SHAPE[::-1], interpolation=cv2.INTER_AREA)
+            return {"mask": small.reshape(*MASK_SHAPE, 1).astype(np.uint8), "state": vector}
+        assert self._state is not None
+        goal = self.task.goal_size
+        start = 13 + 3 * self.controller.config.n_fingers
+        observation = np.concatenate([vector[:start], vector[start + goal :]])
+        return {
+            "observation": observation,
+            "achieved_goal": np.clip(self.task.achieved_goal(self._state), -BOUND, BOUND).astype(
+                np.float32
+            ),
+            "desired_goal": np.clip(self._goal, -BOUND, BOUND).astype(np.float32),
+        }
+
+    def _info(self, success: bool, n_particles: int) -> dict[str, Any]:
+        assert self._state is not None
+        m = self._metrics
+        position, quaternion = self._sim.object_pose(self.task.object_name)
+        return {
+            "is_success": bool(success),
+            "object_pose": np.concatenate([position, quaternion]),
+            "slip": m.slip,
+            "grip_force": m.grip_force,
+            "n_particles": int(n_particles),
+            "force_closure": bool(m.force_closure),
+            "epsilon": m.epsilon,
+            "tilt": m.tilt,
+            "penetration": m.penetration,
+            "n_contacts": m.n_contacts,
+            "achieved_goal": self.task.achieved_goal(self._state),
+            "desired_goal": self._goal.copy(),
+        }
+
+    def _top_view(self) -> NDArray[np.uint8]:
+        """Top-down picture: mask, contours, particles, object and goal (RGB)."""
+        sim = self._sim
+        surface = sim.surface
+        canvas = draw_mask(self._mask)
+        obj = sim.config.objects[0]
+        if self.task.goal_size == 3 and self.task.name != "CatchBall":
+            goal_pose = np.array([self._goal[0], self._goal[1], 0.0])
+            draw_polyline(
+                canvas, surface, footprint(obj, goal_pose, float(self._goal[2])), (90, 200, 90)
+            )
+        position, quaternion = sim.object_pose(self.task.object_name)
+        outline = footprint(obj, position, yaw_of(quaternion))
+        draw_polyline(canvas, surface, outline, (255, 200, 80), thickness=2)
+        particles = sim.particle_positions()
+        if len(particles):
+            draw_points(canvas, surface, particles[:, :2], (80, 80, 255), radius=1.5)
+        for i, finger in enumerate(self.controller.finger_positions()):
+            colour = id_colour(i)
+            centre = surface.world_to_pixel(finger)
+            cv2.circle(canvas, (int(centre[0]), int(centre[1])), 3, colour, 1, cv2.LINE_AA)
+        return np.ascontiguousarray(canvas[:, :, ::-1])
+
+
+class GoalGraspEnv(GraspEnv):
+    """GraspEnv with ``obs_mode="goal"``: adds Gymnasium-Robotics' ``compute_reward``
+    (only here, since checkers take any env that has one for a goal environment)."""
+
+    def compute_reward(
+        self, achieved_goal: NDArray[Any], desired_goal: NDArray[Any], info: Any
+    ) -> NDArray[np.float64] | float:
+        """Vectorised reward for hindsight relabelling; see :meth:`goal_reward`."""
+        return self.goal_reward(achieved_goal, desired_goal, info)
+
+
+def make_grasp_env(obs_mode: ObsMode = "state", **kwargs: Any) -> GraspEnv:
+    """The registrations' entry point: a :class:`GoalGraspEnv` for ``obs_mode="goal"``,
+    a :class:`GraspEnv` otherwise."""
+    if obs_mode == "goal":
+        return GoalGraspEnv(obs_mode=obs_mode, **kwargs)
+    return GraspEnv(obs_mode=obs_mode, **kwargs)

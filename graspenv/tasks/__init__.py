@@ -1,0 +1,1 @@
+"""Tasks: goals, rewards, success and grasp-stability metrics."""

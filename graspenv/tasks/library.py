@@ -1,0 +1,192 @@
+"""The six grasp tasks of the suite."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from graspenv.config import ObjectConfig
+from graspenv.surface.controller import ControllerConfig, GripState
+from graspenv.tasks.base import EpisodeState, Task, TaskConfig, wrap_angle
+
+__all__ = [
+    "TASKS",
+    "CatchBall",
+    "SidePush",
+    "SqueezeHold",
+    "SqueezeSlide",
+    "TopRub",
+    "TurnInPlace",
+]
+
+
+class SqueezeHold(Task):
+    """Hold a squeezed box still while a ramped side force pushes it.
+
+    The hand starts down either side of the box, touching its faces. After
+    ``settle_steps`` a force in a random planar direction ramps from 0 to a peak
+    drawn per episode over ``hold_steps``. Success: through the whole hold the box
+    stays within ``position_tolerance`` (5 mm) and ``yaw_tolerance`` (3°) of its pose
+    when the force began. The episode ends when the hold period is over.
+    """
+
+    name = "SqueezeHold"
+    default_config = TaskConfig(
+        position_tolerance=0.005, yaw_tolerance=math.radians(3.0), force=(0.5, 2.0)
+    )
+
+    def start_grip(
+        self, rng: np.random.Generator, obj: ObjectConfig, goal: NDArray[np.float64]
+    ) -> GripState:
+        return GripState(np.array(obj.position), obj.yaw, obj.size[0], True)
+
+    def draw_goal(self, rng: np.random.Generator, obj: ObjectConfig) -> NDArray[np.float64]:
+        return np.array([obj.position[0], obj.position[1], obj.yaw])
+
+    def _phase(self, state: EpisodeState) -> float:
+        """Fraction of the hold period done (< 0 before the force starts)."""
+        cfg = self.config
+        return (state.step - cfg.settle_steps) / cfg.hold_steps
+
+    def disturbance(self, state: EpisodeState) -> NDArray[np.float64] | None:
+        ramp = self._phase(state)
+        if ramp < 0.0 or ramp > 1.0:
+            return None
+        direction = state.extra["force_direction"]
+        return float(state.extra["force_peak"]) * ramp * np.array([*direction, 0.0])
+
+    def is_success(self, state: EpisodeState, goal: NDArray[np.float64]) -> bool:
+        cfg = self.config
+        phase = self._phase(state)
+        if phase <= 0.0:
+            state.extra["hold_pose"] = self.achieved_goal(state)
+            state.extra["held"] = True
+            return False
+        position, yaw = self.goal_errors(self.achieved_goal(state), state.extra["hold_pose"])
+        held = bool(position <= cfg.position_tolerance and yaw <= cfg.yaw_tolerance)
+        state.extra["held"] = state.extra["held"] and held
+        return phase >= 1.0 and bool(state.extra["held"])
+
+    def goal_errors(
+        self, achieved: NDArray[np.float64], desired: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        position = np.linalg.norm(achieved[..., :2] - desired[..., :2], axis=-1)
+        return position, np.abs(wrap_angle(achieved[..., 2] - desired[..., 2]))
+
+    def is_done(self, state: EpisodeState, success: bool) -> bool:
+        return self._phase(state) >= 1.0
+
+
+class TurnInPlace(Task):
+    """Turn a box in place to a target yaw (30°–120° either way): success within 5°
+    with its centre within 1 cm of where it started."""
+
+    name = "TurnInPlace"
+    default_config = TaskConfig(goal_yaw=(math.radians(30), math.radians(120)))
+
+
+class SqueezeSlide(Task):
+    """Bring a box 5–12 cm to a target position by gripping its sides: success with
+    its centre within 1 cm."""
+
+    name = "SqueezeSlide"
+    default_config = TaskConfig(goal_distance=(0.05, 0.12))
+
+
+class SidePush(Task):
+    """Push a box 5–10 cm to a target by striking its sides: success within 1.5 cm.
+    The fingers start lifted behind the box, on the far side from the goal."""
+
+    name = "SidePush"
+    default_action_mode = "fingers"
+    default_config = TaskConfig(goal_distance=(0.05, 0.10), position_tolerance=0.015)
+
+    def start_grip(
+        self, rng: np.random.Generator, obj: ObjectConfig, goal: NDArray[np.float64]
+    ) -> GripState:
+        away = np.asarray(obj.position) - goal[:2]
+        away /= max(float(np.linalg.norm(away)), 1e-9)
+        reach = 0.5 * math.hypot(obj.size[0], obj.size[1]) + 0.02
+        centre = np.asarray(obj.position) + reach * away
+        # Fingers side by side across the push direction.
+        return GripState(centre, math.atan2(away[1], away[0]) + math.pi / 2, 0.01, False)
+
+
+class TopRub(Task):
+    """Move a light flat object (a card) to a target pose by friction from its top:
+    success within 1 cm and 10°."""
+
+    name = "TopRub"
+    default_action_mode = "fingers"
+    default_controller = ControllerConfig(n_fingers=1)
+    default_config = TaskConfig(
+        size_min=(0.07, 0.07, 0.008),
+        size_max=(0.09, 0.09, 0.012),
+        mass=(0.01, 0.03),
+        goal_distance=(0.03, 0.06),
+        goal_yaw=(0.0, math.radians(30)),
+        yaw_tolerance=math.radians(10),
+    )
+
+    def start_grip(
+        self, rng: np.random.Generator, obj: ObjectConfig, goal: NDArray[np.float64]
+    ) -> GripState:
+        return GripState(np.array(obj.position), 0.0, 0.0, False)
+
+
+class CatchBall(Task):
+    """Stop a ball rolling across the table with the hand: success when its speed is
+    under 2 cm/s while it is on the table. The goal vector is the ball's planar
+    velocity (desired: zero); the episode also ends when the ball leaves the table."""
+
+    name = "CatchBall"
+    goal_size = 3
+    default_config = TaskConfig(
+        shape="sphere",
+        size_min=(0.015,),
+        size_max=(0.025,),
+        mass=(0.03, 0.1),
+        start=(0.0, 0.1),
+        position_tolerance=0.02,
+    )
+    table_half = (0.305, 0.23)
+
+    def draw_object(self, rng: np.random.Generator) -> ObjectConfig:
+        obj = super().draw_object(rng)
+        return dataclasses.replace(obj, position=(-0.2, obj.position[1]))
+
+    def draw_goal(self, rng: np.random.Generator, obj: ObjectConfig) -> NDArray[np.float64]:
+        return np.zeros(3)
+
+    def start_grip(
+        self, rng: np.random.Generator, obj: ObjectConfig, goal: NDArray[np.float64]
+    ) -> GripState:
+        centre = np.array([0.05, obj.position[1] + rng.uniform(-0.05, 0.05)])
+        return GripState(centre, math.pi / 2, 0.06, False)
+
+    def initial_velocity(self, rng: np.random.Generator) -> NDArray[np.float64]:
+        speed = rng.uniform(*self.config.ball_speed)
+        heading = rng.uniform(-0.2, 0.2)
+        return speed * np.array([math.cos(heading), math.sin(heading), 0.0])
+
+    def achieved_goal(self, state: EpisodeState) -> NDArray[np.float64]:
+        return np.array([state.linear_velocity[0], state.linear_velocity[1], 0.0])
+
+    def _on_table(self, state: EpisodeState) -> bool:
+        return bool(np.all(np.abs(state.position[:2]) <= self.table_half) and state.position[2] > 0)
+
+    def is_success(self, state: EpisodeState, goal: NDArray[np.float64]) -> bool:
+        return self._on_table(state) and super().is_success(state, goal)
+
+    def is_done(self, state: EpisodeState, success: bool) -> bool:
+        return success or not self._on_table(state)
+
+
+#: Task classes by name, in the order of ``graspenv.ENV_IDS``.
+TASKS: dict[str, type[Task]] = {
+    task.name: task
+    for task in (SqueezeHold, TurnInPlace, SqueezeSlide, SidePush, TopRub, CatchBall)
+}

@@ -1,0 +1,733 @@
+"""Grasp-stability metrics from the contacts on an object (numpy only).
+
+Everything here works on plain arrays: :func:`grasp_metrics` reads any object with the
+attribute names of :class:`graspenv.physics.ContactReport` (see
+:class:`ContactArrays`), so this module never imports PyBullet.
+
+Frames and units: world frame (origin at the table centre, z up), SI units (m, m/s,
+N, rad); quaternions are (x, y, z, w). Grasp quality is planar: the table is the
+plane of the grasp, so only the in-plane components of contact positions, normals and
+velocities enter :func:`ferrari_canny` and the slip.
+
+The planar Ferrari–Canny epsilon
+--------------------------------
+Each contact i at point p_i (relative to a centre c) with inward unit normal n_i and
+friction coefficient μ can push with any force in its friction cone, the wedge
+between the edges ``n_i ± μ t_i`` (t_i the unit tangent): unit normal force, as in
+Ferrari and Canny (1992). A force f at p is the planar wrench ``(f_x, f_y, τ/ρ)``
+with ``τ = p × f`` and ρ a characteristic length that makes torque commensurate with
+force (default: the largest distance of a contact from the centre, so |τ/ρ| ≤ |f|).
+The primitive wrenches are the cone edges of every contact; epsilon is the radius of
+the largest ball about the origin inside their convex hull Q (the L1 quality: the
+smallest disturbance wrench, in the worst direction, that a unit total of normal
+force can resist). Epsilon is 0 when the origin is not strictly inside Q: then some
+wrench cannot be resisted at all (no force closure).
+
+For a convex polytope containing the origin, that radius is the smallest distance
+from the origin to a facet plane, equivalently ``min over unit d of max_i w_i · d``
+(the support function at the facet normals). It is computed exactly: an incremental
+3-D convex hull of the primitive wrenches gives the facets, and epsilon is the
+smallest support value over their outward normals. The hull is checked to contain
+every wrench; should floating point ever break it, an exhaustive enumeration of the
+facet planes through triples of wrenches gives the same answer more slowly. The only
+approximation is a geometric tolerance of ``1e-9`` times the largest wrench
+coordinate: a wrench set flatter than that (e.g. frictionless contacts whose normals
+all pass through the centre) counts as having no interior, and an epsilon below it
+is reported as 0.
+
+Note that in the plane two antipodal contacts with friction *are* force closure
+(Nguyen's two-finger condition: the line between the contacts lies inside both
+friction cones): the opposing tangential friction forces form a couple that resists
+torque about the axis normal to the plane. A torque about the line joining two point
+contacts, which they cannot resist in 3-D, does not exist in the planar model.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "ContactArrays",
+    "GraspMetrics",
+    "coulomb_slip_force",
+    "ferrari_canny",
+    "force_closure",
+    "grasp_metrics",
+    "planar_slip",
+    "rigid_velocity_at",
+    "tilt_angle",
+]
+
+# Relative to the largest wrench coordinate (about 1 with the default torque scale).
+_RELATIVE_TOLERANCE = 1e-9
+
+
+class ContactArrays(Protocol):
+    """The per-contact arrays :func:`grasp_metrics` reads from a contact report.
+
+    :class:`graspenv.physics.ContactReport` has them; any object with these
+    attributes does. One row per contact point of one object, K rows.
+    """
+
+    @property
+    def particle(self) -> NDArray[np.int64]:
+        """Id of the particle in each contact, -1 when not a particle, shape (K,)."""
+        ...
+
+    @property
+    def position(self) -> NDArray[np.float64]:
+        """Contact points on the object, metres, world frame, shape (K, 3)."""
+        ...
+
+    @property
+    def normal(self) -> NDArray[np.float64]:
+        """Unit contact normals pointing into the object, world frame, shape (K, 3)."""
+        ...
+
+    @property
+    def normal_force(self) -> NDArray[np.float64]:
+        """Normal force on the object, newtons, >= 0, shape (K,)."""
+        ...
+
+    @property
+    def distance(self) -> NDArray[np.float64]:
+        """Signed separation, metres (negative: penetration), shape (K,)."""
+        ...
+
+
+@dataclass(frozen=True)
+class GraspMetrics:
+    """How well an object is held, from one physics step.
+
+    Attributes:
+        grip_force: sum of the normal forces of all particle contacts on the object,
+            newtons (both sides of a squeeze, and particles pressing from above).
+        n_contacts: number of distinct particles touching the object.
+        force_closure: whether the particles' side contacts hold the object in force
+            closure in the table plane (``epsilon > closure_tolerance``).
+        epsilon: planar Ferrari–Canny quality of those contacts, dimensionless
+            (force per unit total normal force), >= 0; see :func:`ferrari_canny`.
+        slip: speed of the object's centre relative to the best-fit rigid planar
+            motion of the touching particles, m/s; the object's planar speed when no
+            particle touches it.
+        tilt: angle between the object's z axis and the world's, radians in [0, π].
+        penetration: deepest particle penetration into the object, metres, >= 0.
+    """
+
+    grip_force: float
+    n_contacts: int
+    force_closure: bool
+    epsilon: float
+    slip: float
+    tilt: float
+    penetration: float
+
+    @classmethod
+    def empty(cls) -> GraspMetrics:
+        """Metrics of an object at rest that nothing touches (all zero, no closure)."""
+        return cls(
+            grip_force=0.0,
+            n_contacts=0,
+            force_closure=False,
+            epsilon=0.0,
+            slip=0.0,
+            tilt=0.0,
+            penetration=0.0,
+        )
+
+
+# -- Ferrari–Canny ----------------------------------------------------------------------
+
+
+def ferrari_canny(
+    points: ArrayLike,
+    normals: ArrayLike,
+    mu: float,
+    centre: ArrayLike,
+    torque_scale: float | None = None,
+    cone_edges: int = 2,
+) -> float:
+    """Planar Ferrari–Canny epsilon (L1 quality) of a set of frictional point contacts.
+
+    The radius of the largest ball about the origin inside the convex hull of the
+    primitive wrenches ``(f_x, f_y, τ/ρ)`` of every contact's friction cone (see the
+    module docstring), computed exactly from the hull's facets.
+
+    Args:
+        points: contact points, metres, world frame (or any planar frame shared with
+            ``centre``), shape (K, 2).
+        normals: contact normals pointing into the object, same frame, shape (K, 2);
+            normalised here, must be non-zero.
+        mu: Coulomb friction coefficient of the contacts, >= 0.
+        centre: the point torques are taken about (the object's centre of mass),
+            metres, shape (2,).
+        torque_scale: ρ, metres, > 0; torques are divided by it. None: the largest
+            distance of a contact point from ``centre`` (so the value does not
+            change when the whole grasp is scaled).
+        cone_edges: forces sampled across each friction cone, ``n + μ s t`` for s
+            evenly spaced in [-1, 1], >= 2. In the plane the two edges span the cone
+            exactly and wrenches are linear in the force, so more samples lie inside
+            the hull and leave epsilon unchanged; the parameter keeps the interface of
+            3-D cone discretisations.
+
+    Returns:
+        Epsilon, dimensionless, >= 0; 0 without force closure, with fewer than two
+        contacts, or for a wrench set flatter than the tolerance (1e-9 relative).
+
+    Raises:
+        ValueError: on mismatched shapes, a zero normal, ``mu < 0``,
+            ``torque_scale <= 0`` or ``cone_edges < 2``.
+    """
+    wrenches = _primitive_wrenches(points, normals, mu, centre, torque_scale, cone_edges)
+    if wrenches is None:
+        return 0.0
+    return _epsilon_of_wrenches(wrenches)
+
+
+def force_closure(
+    points: ArrayLike,
+    normals: ArrayLike,
+    mu: float,
+    centre: ArrayLike,
+    torque_scale: float | None = None,
+    cone_edges: int = 2,
+    tolerance: float = 0.0,
+) -> bool:
+    """Whether planar frictional contacts hold an object in force closure.
+
+    Force closure means the contacts can resist any planar wrench: the origin is
+    strictly inside the convex hull of their primitive wrenches, i.e.
+    :func:`ferrari_canny` is positive.
+
+    Args:
+        points: contact points, metres, shape (K, 2).
+        normals: contact normals pointing into the object, shape (K, 2).
+        mu: Coulomb friction coefficient, >= 0.
+        centre: the point torques are taken about, metres, shape (2,).
+        torque_scale: ρ, metres; see :func:`ferrari_canny`.
+        cone_edges: forces sampled per friction cone; see :func:`ferrari_canny`.
+        tolerance: the least epsilon counted as closure (epsilon must exceed it).
+            0 (the default) already excludes configurations within floating-point
+            tolerance of the boundary, which :func:`ferrari_canny` reports as 0; pass a
+            positive margin for grasps that must survive noise.
+
+    Returns:
+        ``ferrari_canny(...) > tolerance``.
+    """
+    return ferrari_canny(points, normals, mu, centre, torque_scale, cone_edges) > tolerance
+
+
+def _primitive_wrenches(
+    points: ArrayLike,
+    normals: ArrayLike,
+    mu: float,
+    centre: ArrayLike,
+    torque_scale: float | None,
+    cone_edges: int,
+) -> NDArray[np.float64] | None:
+    """Wrenches ``(f_x, f_y, τ/ρ)`` of every friction-cone sample, shape (K·E, 3).
+
+    None when there are fewer than two contacts (never force closure).
+    """
+    p = np.asarray(points, dtype=float)
+    n = np.asarray(normals, dtype=float)
+    c = np.asarray(centre, dtype=float)
+    if p.ndim != 2 or p.shape[1] != 2 or n.shape != p.shape:
+        raise ValueError(
+            f"points and normals must both have shape (K, 2), got {p.shape} and {n.shape}"
+        )
+    if c.shape != (2,):
+        raise ValueError(f"centre must have shape (2,), got {c.shape}")
+    if not mu >= 0.0 or not math.isfinite(mu):
+        raise ValueError(f"mu must be a finite friction coefficient >= 0, got {mu}")
+    if torque_scale is not None and not torque_scale > 0.0:
+        raise ValueError(f"torque_scale must be > 0 metres or None, got {torque_scale}")
+    if cone_edges < 2:
+        raise ValueError(f"cone_edges must be >= 2, got {cone_edges}")
+    if p.shape[0] < 2:
+        return None
+    length = np.linalg.norm(n, axis=1)
+    if not np.all(length > 0.0):
+        raise ValueError(f"every normal must be non-zero; rows {np.flatnonzero(length == 0)}")
+    n = n / length[:, None]
+    t = np.column_stack([-n[:, 1], n[:, 0]])
+    r = p - c
+    rho = float(np.max(np.linalg.norm(r, axis=1))) if torque_scale is None else torque_scale
+    if rho == 0.0:  # every contact at the centre: no torques at all (a flat wrench set)
+        rho = 1.0
+    # Without friction the samples coincide; one per contact keeps the hull small.
+    s = np.linspace(-1.0, 1.0, cone_edges) if mu > 0.0 else np.zeros(1)
+    force = n[:, None, :] + (mu * s)[None, :, None] * t[:, None, :]  # (K, E, 2)
+    torque = r[:, None, 0] * force[..., 1] - r[:, None, 1] * force[..., 0]  # (K, E)
+    return np.concatenate([force, (torque / rho)[..., None]], axis=2).reshape(-1, 3)
+
+
+def _epsilon_of_wrenches(wrenches: NDArray[np.float64]) -> float:
+    """Distance from the origin to the boundary of the hull of ``wrenches`` (N, 3).
+
+    0 when the origin is not strictly inside (or the hull is flat).
+    """
+    tol = _RELATIVE_TOLERANCE * max(1.0, float(np.max(np.abs(wrenches))))
+    facets = _convex_hull_normals(_torque_extremes(wrenches, tol), tol)
+    if facets is None:
+        return 0.0
+    # The support value at each outward facet normal is that facet plane's distance
+    # from the origin (negative when the origin is beyond it).
+    support = np.max(wrenches @ facets.T, axis=0)
+    epsilon = float(np.min(support))
+    return epsilon if epsilon > tol else 0.0
+
+
+def _torque_extremes(wrenches: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
+    """The wrenches that can be hull vertices among those sharing a force.
+
+    Wrenches with one force (contacts on a flat face, same cone edge) lie on a
+    vertical line in (f_x, f_y, τ/ρ), so all but the two torque extremes are convex
+    combinations of those two and leave the hull unchanged. Forces are compared on a
+    grid of spacing ``tol``: points a rounding apart count as one line, which moves
+    the hull by at most ``tol``.
+    """
+    key = np.round(wrenches[:, :2] / tol).astype(np.int64)
+    _, line = np.unique(key, axis=0, return_inverse=True)
+    line = line.reshape(-1)
+    order = np.lexsort((wrenches[:, 2], line))
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = line[order[1:]] != line[order[:-1]]
+    last = np.ones(len(order), dtype=bool)
+    last[:-1] = first[1:]
+    return wrenches[order[first | last]]
+
+
+def _cross(u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Row-wise cross product of (M, 3) arrays (np.cross costs ~20 µs a call here)."""
+    return np.column_stack(
+        [
+            u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1],
+            u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+            u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0],
+        ]
+    )
+
+
+def _plane_normals(
+    points: NDArray[np.float64], faces: NDArray[np.intp]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Unit normals ``(b − a) × (c − a)`` of triangles (F, 3) and their offsets n·a."""
+    a, b, c = points[faces[:, 0]], points[faces[:, 1]], points[faces[:, 2]]
+    normal = _cross(b - a, c - a)
+    normal /= np.sqrt(np.einsum("ij,ij->i", normal, normal))[:, None]
+    return normal, np.einsum("ij,ij->i", normal, a)
+
+
+def _fan_plane(
+    a: list[float], b: list[float], apex: list[float]
+) -> tuple[float, float, float, float]:
+    """Unit normal ``(b − a) × (apex − a)`` and offset of one new facet, as floats.
+
+    The normal is NaN for a degenerate triangle, which fails the hull's final check.
+    """
+    ux, uy, uz = b[0] - a[0], b[1] - a[1], b[2] - a[2]
+    vx, vy, vz = apex[0] - a[0], apex[1] - a[1], apex[2] - a[2]
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    length = math.sqrt(nx * nx + ny * ny + nz * nz)
+    if length == 0.0:
+        return (math.nan, math.nan, math.nan, math.nan)
+    nx, ny, nz = nx / length, ny / length, nz / length
+    return (nx, ny, nz, nx * a[0] + ny * a[1] + nz * a[2])
+
+
+def _convex_hull_normals(points: NDArray[np.float64], tol: float) -> NDArray[np.float64] | None:
+    """Outward unit normals of the facets of the convex hull of 3-D points, (F, 3).
+
+    Incremental construction: a starting tetrahedron of far-apart points, then each
+    remaining point (farthest from the centroid first, so more of the later ones fall
+    inside and cost one matrix-vector product) replaces the facets it sees by a fan
+    from their horizon to itself. Points within ``tol`` of a facet plane count as on
+    it, so coplanar and collinear points add nothing.
+
+    Returns:
+        The facet normals (coplanar facets may repeat a plane), or None when the
+        points span less than three dimensions (beyond ``tol``).
+    """
+    count = points.shape[0]
+    if count < 4:
+        return None
+    spread = np.linalg.norm(points - points.mean(axis=0), axis=1)
+    i0 = int(np.argmax(spread))
+    i1 = int(np.argmax(np.linalg.norm(points - points[i0], axis=1)))
+    axis = points[i1] - points[i0]
+    if np.linalg.norm(axis) <= tol:
+        return None
+    from_i0 = points - points[i0]
+    off_line = np.linalg.norm(_cross(from_i0, np.broadcast_to(axis, from_i0.shape)), axis=1)
+    off_line /= np.linalg.norm(axis)
+    i2 = int(np.argmax(off_line))
+    if off_line[i2] <= tol:
+        return None
+    plane = _cross(axis[None, :], (points[i2] - points[i0])[None, :])[0]
+    height = from_i0 @ (plane / np.linalg.norm(plane))
+    i3 = int(np.argmax(np.abs(height)))
+    if abs(height[i3]) <= tol:
+        return None
+
+    # Facets live in preallocated rows; a replaced facet is marked dead, not removed.
+    capacity = 8 * count
+    faces = np.zeros((capacity, 3), dtype=np.intp)
+    normals = np.zeros((capacity, 3))
+    offsets = np.zeros(capacity)
+    alive = np.zeros(capacity, dtype=bool)
+    used = 4
+    interior = points[[i0, i1, i2, i3]].mean(axis=0)
+    faces[:4] = [[i0, i1, i2], [i0, i1, i3], [i0, i2, i3], [i1, i2, i3]]
+    normals[:4], offsets[:4] = _plane_normals(points, faces[:4])
+    inward = normals[:4] @ interior - offsets[:4] > 0.0
+    faces[:4][inward] = faces[:4][inward][:, [0, 2, 1]]
+    normals[:4][inward] *= -1.0
+    offsets[:4][inward] *= -1.0
+    alive[:4] = True
+
+    coords = points.tolist()
+    for k in np.argsort(-spread, kind="stable").tolist():
+        if k in (i0, i1, i2, i3):
+            continue
+        height = normals[:used] @ points[k]
+        height -= offsets[:used]
+        seen = np.flatnonzero((height > tol) & alive[:used])
+        if seen.size == 0:
+            continue
+        # A horizon edge borders one seen facet: inside the seen patch every directed
+        # edge a→b meets its reverse b→a in the neighbouring facet.
+        edges: set[tuple[int, int]] = set()
+        for a, b, c in faces[seen].tolist():
+            edges.update(((a, b), (b, c), (c, a)))
+        horizon = [(a, b) for a, b in edges if (b, a) not in edges]
+        if used + len(horizon) > capacity:
+            keep = np.flatnonzero(alive[:used])
+            used = keep.size
+            faces[:used], normals[:used], offsets[:used] = faces[keep], normals[keep], offsets[keep]
+            alive[:] = False
+            alive[:used] = True
+            seen = np.flatnonzero(normals[:used] @ points[k] - offsets[:used] > tol)
+        alive[seen] = False
+        # Keeping each horizon edge's direction keeps every facet's winding outward.
+        # A fan has a handful of facets: plain floats beat numpy's per-call cost.
+        end = used + len(horizon)
+        faces[used:end] = [(a, b, k) for a, b in horizon]
+        planes = [_fan_plane(coords[a], coords[b], coords[k]) for a, b in horizon]
+        normals[used:end] = [plane[:3] for plane in planes]
+        offsets[used:end] = [plane[3] for plane in planes]
+        alive[used:end] = True
+        used = end
+
+    normals, offsets = normals[:used][alive[:used]], offsets[:used][alive[:used]]
+    # A valid hull has every point inside every facet and the interior point strictly
+    # inside; floating point can in principle break an incremental hull.
+    valid = (
+        np.all(np.isfinite(normals))
+        and np.max(points @ normals.T - offsets) <= 100.0 * tol
+        and np.all(normals @ interior - offsets < 0.0)
+    )
+    return normals if valid else _facet_normals_by_enumeration(points, tol)
+
+
+def _facet_normals_by_enumeration(
+    points: NDArray[np.float64], tol: float
+) -> NDArray[np.float64] | None:
+    """The hull's facet normals found by testing the plane through every triple.
+
+    Exhaustive, O(N⁴): the fallback of :func:`_convex_hull_normals` and its check.
+    A plane through three points is a facet plane when no point lies beyond it by more
+    than ``tol``; its outward side is the one with no points.
+
+    Returns:
+        Outward unit normals (F, 3), or None when the points span less than three
+        dimensions.
+    """
+    centred = points - points.mean(axis=0)
+    if points.shape[0] < 4 or np.linalg.svd(centred, compute_uv=False)[-1] <= tol:
+        return None
+    found = []
+    triples = np.array(list(itertools.combinations(range(points.shape[0]), 3)), dtype=np.intp)
+    for chunk in np.array_split(triples, max(1, len(triples) // 4096)):
+        a, b, c = points[chunk[:, 0]], points[chunk[:, 1]], points[chunk[:, 2]]
+        normal = _cross(b - a, c - a)
+        length = np.linalg.norm(normal, axis=1)
+        keep = length > tol
+        normal = normal[keep] / length[keep, None]
+        side = points @ normal.T - np.einsum("ij,ij->i", normal, a[keep])
+        below = np.all(side <= tol, axis=0)
+        above = np.all(side >= -tol, axis=0)
+        found.append(np.concatenate([normal[below & ~above], -normal[above & ~below]]))
+    normals = np.concatenate(found)
+    return normals if len(normals) else None
+
+
+# -- slip, tilt and the Coulomb limit ---------------------------------------------------
+
+
+def rigid_velocity_at(
+    points: ArrayLike, velocities: ArrayLike, query: ArrayLike
+) -> NDArray[np.float64]:
+    """Velocity at ``query`` of the planar rigid motion that best fits moving points.
+
+    Fits a twist (v, ω), ``u_i ≈ v + ω ẑ × (p_i − p̄)``, by least squares (p̄ the
+    centroid, where the fit decouples: v is the mean velocity and ω the
+    moment-weighted mean rotation rate). With one point, or all points at one place,
+    ω = 0 (pure translation).
+
+    Args:
+        points: points, metres, world frame, shape (P, 2), P >= 1.
+        velocities: their velocities, m/s, world frame, shape (P, 2).
+        query: where to evaluate the fitted motion, metres, shape (2,).
+
+    Returns:
+        The fitted rigid velocity at ``query``, m/s, shape (2,).
+    """
+    p = np.asarray(points, dtype=float).reshape(-1, 2)
+    u = np.asarray(velocities, dtype=float).reshape(-1, 2)
+    q = np.asarray(query, dtype=float)
+    if len(p) == 0 or u.shape != p.shape:
+        raise ValueError(
+            f"points and velocities must both have shape (P, 2), P >= 1, got {p.shape}"
+            f" and {u.shape}"
+        )
+    centroid = p.mean(axis=0)
+    mean_velocity = u.mean(axis=0)
+    r = p - centroid
+    du = u - mean_velocity
+    moment = float(np.sum(r * r))
+    # Below this the points are one point to rounding: no rotation is observable.
+    if moment <= 1e-24 * max(1.0, float(np.max(np.abs(p)))) ** 2:
+        omega = 0.0
+    else:
+        omega = float(np.sum(r[:, 0] * du[:, 1] - r[:, 1] * du[:, 0])) / moment
+    d = q - centroid
+    return mean_velocity + omega * np.array([-d[1], d[0]])
+
+
+def planar_slip(
+    object_position: ArrayLike,
+    object_velocity: ArrayLike,
+    finger_points: ArrayLike,
+    finger_velocities: ArrayLike,
+) -> float:
+    """Speed of an object relative to the rigid motion of the fingers touching it.
+
+    Args:
+        object_position: the object's centre, metres, world frame, shape (2,) or (3,)
+            (z ignored).
+        object_velocity: its linear velocity, m/s, world frame, shape (2,) or (3,)
+            (z ignored).
+        finger_points: where the fingers (particles) touch it, metres, shape (P, 2)
+            or (P, 3); P may be 0.
+        finger_velocities: the fingers' velocities there, m/s, shape (P, 2) or (P, 3).
+
+    Returns:
+        ``|v_object − v_fit(centre)|`` in the table plane, m/s, with v_fit from
+        :func:`rigid_velocity_at`; the object's planar speed when P = 0.
+    """
+    centre = np.asarray(object_position, dtype=float)[:2]
+    velocity = np.asarray(object_velocity, dtype=float)[:2]
+    points = np.asarray(finger_points, dtype=float)
+    if points.size == 0:
+        return float(np.linalg.norm(velocity))
+    fingers = np.asarray(finger_velocities, dtype=float)
+    fit = rigid_velocity_at(points[:, :2], fingers[:, :2], centre)
+    return float(np.linalg.norm(velocity - fit))
+
+
+def tilt_angle(quaternion: Sequence[float] | NDArray[np.float64]) -> float:
+    """Angle between a body's z axis and the world's z axis.
+
+    Args:
+        quaternion: orientation (x, y, z, w), normalised here, shape (4,).
+
+    Returns:
+        Radians in [0, π]; yaw alone gives 0.
+    """
+    x, y, z, w = np.asarray(quaternion, dtype=float) / np.linalg.norm(quaternion)
+    # Third column of the rotation matrix: the body's z axis in the world frame.
+    axis_x = 2.0 * (x * z + w * y)
+    axis_y = 2.0 * (y * z - w * x)
+    axis_z = 1.0 - 2.0 * (x * x + y * y)
+    return math.atan2(math.hypot(axis_x, axis_y), axis_z)
+
+
+def coulomb_slip_force(grip_force: float, mu: float) -> float:
+    """Tangential force at which a two-sided squeeze lets the object slip (Coulomb).
+
+    Convention: two opposing fingers each press on the object with the normal force
+    ``grip_force`` (N per side); each can hold at most ``μ N`` of tangential force,
+    so the object slips beyond ``2 μ N``. :attr:`GraspMetrics.grip_force` sums both
+    sides, so for a symmetric squeeze pass half of it.
+
+    Args:
+        grip_force: normal force of each finger, newtons, >= 0.
+        mu: friction coefficient between finger and object, >= 0.
+
+    Returns:
+        The slip threshold, newtons.
+    """
+    if not grip_force >= 0.0 or not mu >= 0.0:
+        raise ValueError(f"grip_force and mu must be >= 0, got {grip_force} and {mu}")
+    return 2.0 * mu * grip_force
+
+
+# -- the whole set -----------------------------------------------------------------------
+
+
+def grasp_metrics(
+    report: ContactArrays,
+    object_position: ArrayLike,
+    object_quaternion: ArrayLike,
+    object_linear_velocity: ArrayLike,
+    object_angular_velocity: ArrayLike,
+    particle_velocities: ArrayLike,
+    mu: float,
+    *,
+    torque_scale: float | None = None,
+    cone_edges: int = 2,
+    closure_tolerance: float = 0.0,
+    min_horizontal_normal: float = 0.5,
+) -> GraspMetrics:
+    """Grip force, force closure, slip, tilt and penetration of one object.
+
+    Only particle contacts (``report.particle >= 0``) count: table and object
+    contacts are ignored. A particle *touches* the object when one of its rows has
+    ``distance <= 0`` or a positive normal force (Bullet also reports points a
+    little apart, with no force). A particle may touch with several points (a disc or
+    a stack of spheres): they are merged into one contact per particle, at the
+    normal-force-weighted mean point with the normalised force-weighted mean normal
+    (plain means if its force is 0). That keeps the wrench set small without
+    changing what the particle can push, and weighs every particle once in the slip.
+
+    For the grasp quality, a merged contact is a side contact when the horizontal
+    part of its normal has length >= ``min_horizontal_normal``; particles pressing
+    from above have no planar friction cone and are left out. Torques are about the
+    object's position (its centre of mass).
+
+    Args:
+        report: the object's contacts (e.g. ``PhysicsWorld.contact_report(name)``).
+        object_position: the object's centre, metres, world frame, shape (3,).
+        object_quaternion: its orientation (x, y, z, w), world frame, shape (4,).
+        object_linear_velocity: m/s, world frame, shape (3,); the planar part sets
+            the slip.
+        object_angular_velocity: rad/s, world frame, shape (3,); unused (the slip is
+            measured at the centre), taken so the call mirrors
+            ``Simulation.object_velocity``.
+        particle_velocities: linear velocity of the particle in each particle row of
+            ``report`` (rows with ``particle >= 0``, in order), m/s, world frame,
+            shape (Kp, 2) or (Kp, 3) (z ignored); one row per report row, (K, 2|3),
+            is accepted too.
+        mu: particle–object friction coefficient (Bullet combines the two bodies'
+            coefficients as their product), >= 0.
+        torque_scale: ρ for :func:`ferrari_canny`, metres; None: the farthest side
+            contact from the centre.
+        cone_edges: forces sampled per friction cone, see :func:`ferrari_canny`.
+        closure_tolerance: least epsilon counted as force closure.
+        min_horizontal_normal: side-contact threshold on the horizontal length of the
+            unit normal, in [0, 1] (0.5: at most 60° from the table plane).
+
+    Returns:
+        The metrics; see :class:`GraspMetrics`.
+
+    Raises:
+        ValueError: on mismatched shapes, or an invalid ``mu``.
+    """
+    del object_angular_velocity  # part of the object's state, not of this measure
+    particle = np.asarray(report.particle, dtype=np.int64).reshape(-1)
+    position = np.asarray(report.position, dtype=float).reshape(-1, 3)
+    normal = np.asarray(report.normal, dtype=float).reshape(-1, 3)
+    normal_force = np.asarray(report.normal_force, dtype=float).reshape(-1)
+    distance = np.asarray(report.distance, dtype=float).reshape(-1)
+    centre = np.asarray(object_position, dtype=float).reshape(-1)[:2]
+    planar_velocity = np.asarray(object_linear_velocity, dtype=float).reshape(-1)[:2]
+    is_particle = particle >= 0
+    velocity_rows = _velocity_rows(particle_velocities, is_particle)
+
+    grip_force = float(np.sum(normal_force[is_particle]))
+    penetration = max(0.0, -float(np.min(distance[is_particle], initial=0.0)))
+    tilt = tilt_angle(np.asarray(object_quaternion, dtype=float))
+
+    touching = is_particle & ((distance <= 0.0) | (normal_force > 0.0))
+    ids, row_of = np.unique(particle[touching], return_inverse=True)
+    row_of = row_of.reshape(-1)
+    if ids.size == 0:
+        return GraspMetrics(
+            grip_force=grip_force,
+            n_contacts=0,
+            force_closure=False,
+            epsilon=0.0,
+            slip=float(np.linalg.norm(planar_velocity)),
+            tilt=tilt,
+            penetration=penetration,
+        )
+
+    # Weights fall back to 1 for a particle touching without force, so that it still
+    # has a point and a normal.
+    force = normal_force[touching]
+    total = np.zeros(ids.size)
+    np.add.at(total, row_of, force)
+    weight = np.where(total[row_of] > 0.0, force, 1.0)
+    weight_sum = np.zeros(ids.size)
+    np.add.at(weight_sum, row_of, weight)
+
+    def merged(values: NDArray[np.float64]) -> NDArray[np.float64]:
+        out = np.zeros((ids.size, values.shape[1]))
+        np.add.at(out, row_of, weight[:, None] * values)
+        return out
+
+    points = merged(position[touching]) / weight_sum[:, None]
+    fingers = merged(velocity_rows[touching]) / weight_sum[:, None]
+    normals = merged(normal[touching])
+    horizontal = np.linalg.norm(normals[:, :2], axis=1)
+    side = horizontal >= np.maximum(min_horizontal_normal * np.linalg.norm(normals, axis=1), 1e-300)
+
+    slip = planar_slip(centre, planar_velocity, points[:, :2], fingers)
+    epsilon = ferrari_canny(
+        points[side, :2],
+        normals[side, :2],
+        mu,
+        centre,
+        torque_scale=torque_scale,
+        cone_edges=cone_edges,
+    )
+    return GraspMetrics(
+        grip_force=grip_force,
+        n_contacts=int(ids.size),
+        force_closure=epsilon > closure_tolerance,
+        epsilon=epsilon,
+        slip=slip,
+        tilt=tilt,
+        penetration=penetration,
+    )
+
+
+def _velocity_rows(
+    particle_velocities: ArrayLike, is_particle: NDArray[np.bool_]
+) -> NDArray[np.float64]:
+    """Planar particle velocities spread over every report row, (K, 2); 0 elsewhere."""
+    given = np.asarray(particle_velocities, dtype=float)
+    given = given.reshape(0, 2) if given.size == 0 else given
+    n_rows, n_particle = is_particle.size, int(np.count_nonzero(is_particle))
+    if (
+        given.ndim != 2
+        or given.shape[1] not in (2, 3)
+        or given.shape[0] not in (n_particle, n_rows)
+    ):
+        raise ValueError(
+            f"particle_velocities must have shape ({n_particle}, 2|3), one row per particle"
+            f" contact of the report (or ({n_rows}, 2|3), one per row), got {given.shape}"
+        )
+    if given.shape[0] == n_rows:
+        return given[:, :2].copy()
+    rows = np.zeros((n_rows, 2))
+    rows[is_particle] = given[:, :2]
+    return rows

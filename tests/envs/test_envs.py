@@ -253,3 +253,23 @@ def test_a_thousand_resets_do_not_grow_memory() -> None:
     finally:
         env.close()
     assert after - before < 20_000  # kB
+
+
+@pytest.mark.parametrize("mode", ["rgb_array", "rgb_array_3d"])
+def test_record_video_wraps_both_render_modes(mode: str, tmp_path: Any) -> None:
+    from gymnasium.wrappers import RecordVideo
+
+    env = RecordVideo(
+        _make("graspenv/TurnInPlace-v0", render_mode=mode),
+        str(tmp_path),
+        episode_trigger=lambda episode: True,
+        disable_logger=True,
+    )
+    try:
+        env.reset(seed=0)
+        for _ in range(5):
+            env.step(env.action_space.sample())
+    finally:
+        env.close()
+    videos = list(tmp_path.glob("*.mp4"))
+    assert len(videos) == 1 and videos[0].stat().st_size > 1000

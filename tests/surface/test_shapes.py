@@ -8,7 +8,7 @@ from collections.abc import Callable
 import cv2
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from numpy.typing import NDArray
 
@@ -100,6 +100,7 @@ def test_ellipse_distance_on_its_axes_and_at_its_centre() -> None:
 
 
 @settings(deadline=None, max_examples=40)
+@example(a=0.019503165510178132, b=0.015625, xy=(1.60169927028697e-130, 0.015625))
 @given(
     a=st.floats(0.002, 0.02),
     b=st.floats(0.002, 0.02),
@@ -109,8 +110,11 @@ def test_ellipse_distance_is_exact_anywhere(a: float, b: float, xy: tuple[float,
     tip = Fingertip((0.0, 0.0), 0.0, radii=(a, b))
     point = np.array([xy])
     brute = _distance_to_polyline(point, tip.outline(2e-6))
-    assert abs(abs(tip.signed_distance(point)[0]) - brute[0]) <= 1e-8
-    assert (tip.signed_distance(point)[0] <= 0) == tip.contains(point)[0]
+    distance = tip.signed_distance(point)[0]
+    assert abs(abs(distance) - brute[0]) <= 1e-8
+    # A point on the boundary, to rounding, may be classified either way.
+    if abs(distance) > 1e-12:
+        assert (distance <= 0) == tip.contains(point)[0]
 
 
 def test_press_enlarges_the_fingertip_along_the_finger_most() -> None:

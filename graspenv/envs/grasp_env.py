@@ -248,11 +248,12 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         self._mask = np.zeros(self._sim.surface.shape, np.uint8)
         _, q = self._sim.object_pose(task.object_name)
         self._yaw_unwrapped = self._yaw_last = yaw_of(q)
-        extra: dict[str, Any] = {}
-        if hasattr(task, "disturbance"):
-            heading = rng.uniform(-math.pi, math.pi)
-            extra["force_direction"] = (math.cos(heading), math.sin(heading))
-            extra["force_peak"] = float(rng.uniform(*task.config.force))
+        # The disturbance's direction and peak (tasks that push the object use them).
+        heading = rng.uniform(-math.pi, math.pi)
+        extra: dict[str, Any] = {
+            "force_direction": (math.cos(heading), math.sin(heading)),
+            "force_peak": float(rng.uniform(*task.config.force)),
+        }
         self._state = self._read_state(step=0, extra=extra)
         info = self._info(success=False, n_particles=0)
         return self._observation(), info

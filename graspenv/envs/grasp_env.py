@@ -217,6 +217,26 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
                     "desired_goal": goal,
                 }
             )
+        sizes = {
+            "object_position": 3,
+            "object_quaternion": 4,
+            "object_linear_velocity": 3,
+            "object_angular_velocity": 3,
+            "finger_positions": 2 * n,
+            "finger_touching": n,
+            "goal": self.task.goal_size,
+            "finger_force": n,
+            "finger_contacts": n,
+            "slip": 1,
+        }
+        ends = np.cumsum(list(sizes.values()))
+        self.observation_layout: dict[str, slice] = {
+            name: slice(int(end - size), int(end))
+            for (name, size), end in zip(sizes.items(), ends, strict=True)
+        }
+        """Where each quantity sits in the state vector (``obs_mode="state"``, and the
+        ``state`` entry of ``"mask"``); units as in the class docstring (forces in
+        10 N, contact counts in tens)."""
         self._goal = np.zeros(self.task.goal_size)
         self._state: EpisodeState | None = None
         self._metrics = GraspMetrics.empty()

@@ -273,3 +273,19 @@ def test_record_video_wraps_both_render_modes(mode: str, tmp_path: Any) -> None:
         env.close()
     videos = list(tmp_path.glob("*.mp4"))
     assert len(videos) == 1 and videos[0].stat().st_size > 1000
+
+
+def test_observation_layout_names_the_state_vector() -> None:
+    env = _make("graspenv/SqueezeSlide-v0")
+    try:
+        obs, _ = env.reset(seed=4)
+        layout = env.unwrapped.observation_layout
+        position, quaternion = env.unwrapped._sim.object_pose("object")
+        goal = env.unwrapped._goal
+    finally:
+        env.close()
+    assert layout["slip"].stop == obs.shape[0]
+    assert np.allclose(obs[layout["object_position"]], position, atol=1e-6)
+    assert np.allclose(obs[layout["object_quaternion"]], quaternion, atol=1e-6)
+    assert np.allclose(obs[layout["goal"]], goal, atol=1e-6)
+    assert obs[layout["finger_positions"]].shape == (4,)

@@ -1,0 +1,1 @@
+"""Scripted grasp strategies, one or more per environment."""

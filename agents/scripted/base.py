@@ -101,6 +101,6 @@ class ScriptedAgent:
             raise ValueError("a scripted strategy keeps one episode's memory: use n_envs=1")
         if episode_start is not None and bool(np.asarray(episode_start).ravel()[0]):
             self.reset()
-        action = self.act(State(vector[0] if batched else vector, self.layout))
-        action = np.clip(action, -1.0, 1.0).astype(np.float32)
+        raw = self.act(State(vector[0] if batched else vector, self.layout))
+        action = np.clip(raw, -1.0, 1.0).astype(np.float32)
         return (action[None, :] if batched else action), state

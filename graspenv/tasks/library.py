@@ -151,6 +151,9 @@ class CatchBall(Task):
         mass=(0.03, 0.1),
         start=(0.0, 0.1),
         position_tolerance=0.02,
+        # Slower balls stop by themselves before x = 0.11 m (a still hand "catches"
+        # 30 of 30); at these speeds a still hand stops 1 of 20.
+        ball_speed=(0.45, 0.6),
     )
     table_half = (0.305, 0.23)
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 from agents.scripted.base import ScriptedAgent
 from agents.scripted.grip import PinchAndTurn, SqueezeAndSlide
 from agents.scripted.hold_catch import CupAndCatch, FirmHold
+from agents.scripted.push import PushFromBehind, RubFromTop
 
 __all__ = ["STRATEGIES", "ScriptedAgent"]
 
@@ -16,5 +17,7 @@ STRATEGIES: dict[str, tuple[str, type[ScriptedAgent]]] = {
     "firm-hold": ("graspenv/SqueezeHold-v0", FirmHold),
     "pinch-and-turn": ("graspenv/TurnInPlace-v0", PinchAndTurn),
     "squeeze-and-slide": ("graspenv/SqueezeSlide-v0", SqueezeAndSlide),
+    "push-from-behind": ("graspenv/SidePush-v0", PushFromBehind),
+    "rub-from-top": ("graspenv/TopRub-v0", RubFromTop),
     "cup-and-catch": ("graspenv/CatchBall-v0", CupAndCatch),
 }

@@ -17,13 +17,35 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ScriptedAgent", "State", "yaw_from_quaternion"]
+__all__ = ["ScriptedAgent", "State", "squeeze_rate", "yaw_from_quaternion"]
 
 
 def yaw_from_quaternion(q: NDArray[np.floating[Any]]) -> float:
     """Rotation about z of a quaternion (x, y, z, w), radians."""
     x, y, z, w = (float(v) for v in q)
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def squeeze_rate(
+    force: NDArray[np.float64],
+    feel: float = 1.0,
+    firm: float = 3.0,
+    close: float = -1.0,
+    nudge: float = -0.1,
+    ease: float = 0.05,
+) -> float:
+    """The grip-opening action that keeps the weaker finger's force in a band.
+
+    Below ``feel`` newtons the grip closes at ``close``; between ``feel`` and
+    ``firm`` it closes slowly (``nudge``); above ``firm`` it opens a little
+    (``ease``). Closing blindly would drive the contours past the penetration
+    margin, where the penetration limit lifts their particles onto the object's top
+    and the grip is lost.
+    """
+    weakest = float(np.min(force))
+    if weakest < feel:
+        return close
+    return nudge if weakest < firm else ease
 
 
 class State:

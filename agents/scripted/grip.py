@@ -13,22 +13,12 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from agents.scripted.base import ScriptedAgent, State
+from agents.scripted.base import ScriptedAgent, State, squeeze_rate
 
 __all__ = ["PinchAndTurn", "SqueezeAndSlide"]
 
-# Squeeze band, newtons per finger: below FEEL the fingers close fast; in the band
-# they close slowly; above FIRM they open a little.
+# The force (newtons, weaker finger) past which the box counts as held.
 FEEL = 1.0
-FIRM = 3.0
-
-
-def squeeze_rate(force: NDArray[np.float64]) -> float:
-    """The opening action that keeps both fingers' force in the band."""
-    weakest = float(force.min())
-    if weakest < FEEL:
-        return -1.0
-    return -0.1 if weakest < FIRM else 0.05
 
 
 class PinchAndTurn(ScriptedAgent):

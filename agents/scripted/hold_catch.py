@@ -13,7 +13,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from agents.scripted.base import ScriptedAgent, State
+from agents.scripted.base import ScriptedAgent, State, squeeze_rate
 
 __all__ = ["CupAndCatch", "FirmHold"]
 
@@ -45,12 +45,7 @@ class FirmHold(ScriptedAgent):
     def act(self, state: State) -> NDArray[np.float64]:
         force = state.finger_force
         weakest = float(force.min())
-        if weakest < self.feel:
-            opening = -1.0
-        elif weakest < self.firm:
-            opening = -0.1
-        else:
-            opening = 0.05
+        opening = squeeze_rate(force, self.feel, self.firm)
         velocity = np.zeros(2)
         if weakest > self.feel and self._anchor is None:
             self._anchor = state.object_xy.copy()
@@ -109,11 +104,5 @@ class CupAndCatch(ScriptedAgent):
         else:
             move = np.clip((1.0 - self.brake) * velocity / MAX_SPEED, -1.0, 1.0)
             move[1] += float(np.clip(20.0 * (ball[1] - centre[1]), -0.5, 0.5))
-            weakest = float(force.min())
-            if weakest < self.feel:
-                open_rate = -0.3
-            elif weakest < self.firm:
-                open_rate = -0.05
-            else:
-                open_rate = 0.05
+            open_rate = squeeze_rate(force, self.feel, self.firm, close=-0.3, nudge=-0.05)
         return np.array([move[0], move[1], turn, open_rate, 1.0])

@@ -350,6 +350,7 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         m = self._metrics
         return EpisodeState(
             position=position,
+            quaternion=quaternion,
             yaw=self._yaw_unwrapped,
             linear_velocity=linear,
             angular_velocity=angular,
@@ -400,11 +401,10 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
     def _vector(self) -> NDArray[np.float32]:
         state = self._state
         assert state is not None
-        _, quaternion = self._sim.object_pose(self.task.object_name)
         vector = np.concatenate(
             [
                 state.position,
-                quaternion,
+                state.quaternion,
                 state.linear_velocity,
                 state.angular_velocity,
                 state.fingers.ravel(),
@@ -438,11 +438,10 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
 
     def _info(self, success: bool, n_particles: int) -> dict[str, Any]:
         assert self._state is not None
-        m = self._metrics
-        position, quaternion = self._sim.object_pose(self.task.object_name)
+        m, state = self._metrics, self._state
         return {
             "is_success": bool(success),
-            "object_pose": np.concatenate([position, quaternion]),
+            "object_pose": np.concatenate([state.position, state.quaternion]),
             "slip": m.slip,
             "grip_force": m.grip_force,
             "n_particles": int(n_particles),

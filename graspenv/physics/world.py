@@ -99,8 +99,8 @@ class FootprintHits:
             no footprint holds it by more than the margin, shape (N,).
         depth: distance from the point in to the nearest footprint edge of that
             object, metres; -inf where ``object`` is -1, shape (N,).
-        top: height of the top surface under the point (ray cast), metres; where
-            ``object`` is -1 the height of whatever is there, shape (N,).
+        top: height of the top surface under the point (ray cast), metres, where
+            ``object`` is not -1; NaN elsewhere (no ray is cast there), shape (N,).
     """
 
     object: NDArray[np.int64]
@@ -582,7 +582,11 @@ class PhysicsWorld:
             better = (depth > margin) & (depth > best)
             best[better] = depth[better]
             owner[better] = index
-        top = self.ray_heights(points).height
+        # Rays only where a footprint holds the point: this runs every frame.
+        top = np.full(n, np.nan)
+        inside = owner >= 0
+        if np.any(inside):
+            top[inside] = self.ray_heights(points[inside]).height
         return FootprintHits(owner, best, top)
 
     def contact_report(self, name: str) -> ContactReport:

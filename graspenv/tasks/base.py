@@ -115,6 +115,7 @@ class EpisodeState:
 
     Attributes:
         position: object centre, metres, world frame, (3,).
+        quaternion: object orientation (x, y, z, w), (4,).
         yaw: object yaw, unwrapped since the episode started, radians.
         linear_velocity: m/s, (3,); angular_velocity: rad/s, (3,).
         tilt: radians; slip: m/s; grip_force: N; force_closure: bool.
@@ -124,6 +125,7 @@ class EpisodeState:
     """
 
     position: NDArray[np.float64]
+    quaternion: NDArray[np.float64]
     yaw: float
     linear_velocity: NDArray[np.float64]
     angular_velocity: NDArray[np.float64]

@@ -8,8 +8,10 @@ PIP    := $(PY) -m pip install --quiet --disable-pip-version-check
 # pulls a multi-gigabyte CUDA build.
 TORCH  := torch==2.13.0
 OUT    ?= runs/demo
+POLICY ?= agents/policies/TurnInPlace-sac
+EPISODES ?= 100
 
-.PHONY: demo test lint typecheck pytest slow train-deps clean
+.PHONY: demo test lint typecheck pytest slow train-deps baselines compare clean
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -28,8 +30,14 @@ $(VENV)/.train: pyproject.toml $(VENV)/.runtime
 	$(PIP) $(TORCH) -e '.[train]'
 	touch $@
 
-demo: $(VENV)/.runtime
+# The pipeline demo, then a scripted and a learned agent on the same five episodes
+# (the agents need the training extra: stable-baselines3 and the CPU torch).
+demo: $(VENV)/.train
 	$(VENV)/bin/graspenv demo --out $(OUT)
+	$(VENV)/bin/graspenv eval --agent scripted:pinch-and-turn --episodes 5 \
+		--out $(OUT)/scripted --video $(OUT)/scripted/episode.mp4
+	$(VENV)/bin/graspenv eval --agent $(POLICY) --episodes 5 \
+		--out $(OUT)/learned --video $(OUT)/learned/episode.mp4
 
 test: $(VENV)/.dev lint typecheck pytest
 
@@ -48,6 +56,15 @@ slow: $(VENV)/.dev
 	$(PY) -m pytest -q -m slow
 
 train-deps: $(VENV)/.train
+
+# The learned baselines in the README (long: see README "Learned baselines").
+baselines: $(VENV)/.train
+	$(VENV)/bin/graspenv train --env graspenv/TurnInPlace-v0 --algo sac --seed 0
+	$(VENV)/bin/graspenv train --env graspenv/SqueezeSlide-v0 --algo sac --seed 0
+
+# The strategy benchmark in the README.
+compare: $(VENV)/.train
+	$(VENV)/bin/graspenv compare --episodes $(EPISODES) --out runs/compare
 
 clean:
 	rm -rf $(VENV) runs .pytest_cache .mypy_cache .ruff_cache

@@ -1,8 +1,11 @@
 """The ``graspenv`` command.
 
-Sub-commands live in a table so later ones (``train``, ``eval``, ``compare``,
-``bench``) are one function and one line each. Errors a user can cause end with a
-one-line message and exit status 2, not a traceback.
+Sub-commands live in a table, one function and one line each. Commands from other
+packages join through the ``graspenv.commands`` entry-point group (an ``add``
+function taking the sub-parser table): that is how the repository's ``agents``
+package adds ``train``, ``eval`` and ``compare`` without graspenv importing it.
+Errors a user can cause end with a one-line message and exit status 2, not a
+traceback.
 """
 
 from __future__ import annotations
@@ -151,13 +154,27 @@ _COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
 )
 
 
+def _plugin_commands() -> list[Callable[[argparse._SubParsersAction], None]]:
+    """The ``add`` functions registered in the ``graspenv.commands`` group, by name."""
+    from importlib.metadata import entry_points
+
+    found = sorted(entry_points(group="graspenv.commands"), key=lambda ep: ep.name)
+    adders = []
+    for ep in found:
+        try:
+            adders.append(ep.load())
+        except ImportError:  # a registered package that is not importable here
+            continue
+    return adders
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="graspenv", description="Grasping on an imaging touch table, simulated."
     )
     parser.add_argument("--version", action="version", version=f"graspenv {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    for add in _COMMANDS:
+    for add in (*_COMMANDS, *_plugin_commands()):
         add(sub)
     return parser
 
@@ -169,6 +186,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         code: int = args.run(args)
     except (ConfigError, FileNotFoundError, ValueError) as err:
         print(f"graspenv {args.command}: error: {err}", file=sys.stderr)
+        return 2
+    except ModuleNotFoundError as err:
+        print(
+            f"graspenv {args.command}: error: needs {err.name}, which is not installed "
+            "(`make train-deps` installs the training extra)",
+            file=sys.stderr,
+        )
         return 2
     return code
 

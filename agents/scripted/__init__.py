@@ -1,23 +1,38 @@
 """Scripted grasp strategies, one or more per environment.
 
-``STRATEGIES`` maps a strategy's name to its environment id and class; run them all
-with ``python -m agents.scripted.evaluate``.
+``STRATEGIES`` maps a strategy's name to the environment it plays (id and
+``gym.make`` arguments) and its class; measure them with ``graspenv eval`` or
+``graspenv compare``. SqueezeSlide has two: a grip from the sides
+(``squeeze-and-slide``) and, in ``fingers`` action mode, a push from behind
+(``push-to-goal``), so the benchmark can compare them.
 """
 
 from __future__ import annotations
+
+from typing import Any, NamedTuple
 
 from agents.scripted.base import ScriptedAgent
 from agents.scripted.grip import PinchAndTurn, SqueezeAndSlide
 from agents.scripted.hold_catch import CupAndCatch, FirmHold
 from agents.scripted.push import PushFromBehind, RubFromTop
 
-__all__ = ["STRATEGIES", "ScriptedAgent"]
+__all__ = ["STRATEGIES", "ScriptedAgent", "Strategy"]
 
-STRATEGIES: dict[str, tuple[str, type[ScriptedAgent]]] = {
-    "firm-hold": ("graspenv/SqueezeHold-v0", FirmHold),
-    "pinch-and-turn": ("graspenv/TurnInPlace-v0", PinchAndTurn),
-    "squeeze-and-slide": ("graspenv/SqueezeSlide-v0", SqueezeAndSlide),
-    "push-from-behind": ("graspenv/SidePush-v0", PushFromBehind),
-    "rub-from-top": ("graspenv/TopRub-v0", RubFromTop),
-    "cup-and-catch": ("graspenv/CatchBall-v0", CupAndCatch),
+
+class Strategy(NamedTuple):
+    env_id: str
+    agent: type[ScriptedAgent]
+    env_kwargs: dict[str, Any] = {}  # noqa: RUF012  (never mutated)
+
+
+STRATEGIES: dict[str, Strategy] = {
+    "firm-hold": Strategy("graspenv/SqueezeHold-v0", FirmHold),
+    "pinch-and-turn": Strategy("graspenv/TurnInPlace-v0", PinchAndTurn),
+    "squeeze-and-slide": Strategy("graspenv/SqueezeSlide-v0", SqueezeAndSlide),
+    "push-to-goal": Strategy(
+        "graspenv/SqueezeSlide-v0", PushFromBehind, {"action_mode": "fingers"}
+    ),
+    "push-from-behind": Strategy("graspenv/SidePush-v0", PushFromBehind),
+    "rub-from-top": Strategy("graspenv/TopRub-v0", RubFromTop),
+    "cup-and-catch": Strategy("graspenv/CatchBall-v0", CupAndCatch),
 }

@@ -247,6 +247,11 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         self._yaw_last = 0.0
         self._closed = False
 
+    @property
+    def dt(self) -> float:
+        """Simulated seconds per environment step (``frame_skip`` camera frames)."""
+        return self.task.config.frame_skip / self._base_scene.surface.fps
+
     # -- gymnasium API -----------------------------------------------------------------
 
     def reset(

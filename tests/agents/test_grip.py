@@ -6,7 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from agents.scripted.evaluate import run_episodes
+from agents.evaluate import run_episodes
 from agents.scripted.grip import PinchAndTurn, SqueezeAndSlide
 
 HELD_OUT = range(100, 110)

@@ -1,0 +1,128 @@
+"""The ``graspenv train``, ``eval`` and ``compare`` commands.
+
+graspenv never imports agents: these commands reach the ``graspenv`` command through
+the ``graspenv.commands`` entry-point group (``pyproject.toml``), each an ``add``
+function taking argparse's sub-parser table. Heavy imports (stable-baselines3,
+torch) happen when a command runs. User errors raise ``ValueError`` or
+``FileNotFoundError``, which the ``graspenv`` command prints as one line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+__all__ = ["add_compare", "add_eval", "add_train"]
+
+
+def _say(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
+
+
+def _train(args: argparse.Namespace) -> int:
+    from agents.train import train
+
+    result = train(
+        args.env,
+        args.algo,
+        seed=args.seed,
+        config=args.config,
+        out=args.out,
+        steps=args.steps,
+        n_envs=args.n_envs,
+        progress=_say,
+    )
+    print(result.text())
+    return 0
+
+
+def add_train(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "train",
+        help="train a stable-baselines3 PPO or SAC agent (run folder with logs and models)",
+    )
+    p.add_argument("--env", required=True, help="environment id, e.g. graspenv/TurnInPlace-v0")
+    p.add_argument("--algo", required=True, choices=("ppo", "sac"))
+    p.add_argument(
+        "--config", default=None, help="hyperparameter file (default: agents/hyperparams/ALGO.toml)"
+    )
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", default="runs/train", help="parent folder of the run folder")
+    p.add_argument("--steps", type=int, default=None, help="override n_timesteps")
+    p.add_argument("--n-envs", type=int, default=None, help="override n_envs (0: one per core)")
+    p.set_defaults(run=_train)
+
+
+def _progress(label: str) -> Callable[[int, int], None]:
+    def report(done: int, total: int) -> None:
+        if done == total or done % max(total // 10, 1) == 0:
+            _say(f"[{done}/{total}] {label}")
+
+    return report
+
+
+def _eval(args: argparse.Namespace) -> int:
+    from agents.evaluate import FIRST_SEED, evaluate, load_agent, summary_table
+
+    if args.episodes < 1:
+        raise ValueError(f"--episodes must be at least 1, got {args.episodes}")
+    first = FIRST_SEED if args.seed is None else args.seed
+    agent = load_agent(args.agent, first)
+    env_id = args.env or agent.home
+    if env_id is None:
+        raise ValueError(f"--env is needed for agent {args.agent!r}")
+    seeds = range(first, first + args.episodes)
+    report = _progress(f"{agent.label} on {env_id}")
+    result = evaluate(env_id, agent, seeds, args.config, report, args.video)
+    print(summary_table([result.summary()]))
+    out = Path(args.out or f"runs/eval/{env_id.split('/')[-1]}-{agent.label.split(' ')[0]}")
+    for path in [*result.write(out), *([Path(args.video)] if args.video else [])]:
+        print(f"wrote {path}")
+    return 0
+
+
+def add_eval(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "eval",
+        help="measure an agent over seeded episodes (success with 95 %% CI, stability; CSV/JSON)",
+    )
+    p.add_argument("--env", default=None, help="environment id (default: the agent's own)")
+    p.add_argument("--agent", required=True, help="scripted:NAME, random, or a model/run folder")
+    p.add_argument("--episodes", type=int, default=100)
+    p.add_argument("--seed", type=int, default=None, help="first episode seed (default 1000)")
+    p.add_argument("--config", default=None, help="environment file (default: built-in)")
+    p.add_argument("--out", default=None, help="folder for episodes.csv and summary.json")
+    p.add_argument("--video", default=None, help="record the first episode (.mp4 or .gif)")
+    p.set_defaults(run=_eval)
+
+
+def _compare(args: argparse.Namespace) -> int:
+    from agents.compare import compare
+
+    if args.episodes < 1:
+        raise ValueError(f"--episodes must be at least 1, got {args.episodes}")
+    result = compare(args.env, args.agent, args.episodes, args.seed, Path(args.out), progress=_say)
+    print(result.table)
+    for path in result.files:
+        print(f"wrote {path}")
+    return 0
+
+
+def add_compare(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "compare",
+        help="the strategy benchmark: agents × environments, Markdown table and bar chart",
+    )
+    p.add_argument("--env", action="append", help="environment id (repeatable; default all)")
+    p.add_argument(
+        "--agent",
+        action="append",
+        help="agent spec (repeatable; default every scripted strategy, the shipped "
+        "learned policies and random)",
+    )
+    p.add_argument("--episodes", type=int, default=100)
+    p.add_argument("--seed", type=int, default=1000, help="first episode seed")
+    p.add_argument("--out", default="runs/compare", help="folder for the table, CSV and chart")
+    p.set_defaults(run=_compare)

@@ -1,0 +1,329 @@
+"""``graspenv train``: stable-baselines3 PPO or SAC on a graspenv environment.
+
+A run folder records everything needed to reproduce and to use the result:
+
+- ``run.json``: environment, algorithm, seed, the resolved hyperparameters, the
+  command, package versions, the git commit, wall time and steps;
+- ``model.zip`` (final) and ``best_model.zip`` (best periodic evaluation), with
+  ``vecnormalize.pkl`` when observations are normalised;
+- ``checkpoints/``, ``progress.csv`` (every logged value), ``tb/`` (TensorBoard);
+- ``evaluations.csv`` and ``learning_curve.png``: periodic deterministic
+  evaluation (success rate and return against training steps).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from importlib import metadata
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
+
+from agents.hyperparams import algorithm, algorithm_kwargs, load_hyperparams
+
+__all__ = ["TrainResult", "make_env", "make_vec_env", "train"]
+
+PACKAGES = (
+    "graspenv",
+    "gymnasium",
+    "pybullet",
+    "numpy",
+    "opencv-python-headless",
+    "stable-baselines3",
+    "torch",
+)
+
+
+def make_env(env_id: str, env_kwargs: dict[str, Any], wrapper: str) -> gym.Env[Any, Any]:
+    """One environment as training sees it (picklable for subprocess workers)."""
+    import graspenv
+    from agents.wrappers import WRAPPERS
+
+    if env_id not in graspenv.ENV_IDS:
+        raise ValueError(
+            f"unknown environment {env_id!r}; expected one of {list(graspenv.ENV_IDS)}"
+        )
+    env = gym.make(env_id, **env_kwargs)
+    if wrapper:
+        if wrapper not in WRAPPERS:
+            raise ValueError(f"unknown env_wrapper {wrapper!r}; expected one of {list(WRAPPERS)}")
+        env = WRAPPERS[wrapper](env)
+    return env
+
+
+def make_vec_env(
+    env_id: str,
+    settings: dict[str, Any],
+    n_envs: int,
+    seed: int,
+    monitor_dir: Path | None = None,
+) -> Any:
+    """``n_envs`` monitored environments (subprocesses when more than one)."""
+    from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+    factory = functools.partial(
+        make_env, env_id, dict(settings["env_kwargs"]), settings["env_wrapper"]
+    )
+    return sb3_make_vec_env(
+        lambda: factory(),
+        n_envs=n_envs,
+        seed=seed,
+        monitor_dir=None if monitor_dir is None else str(monitor_dir),
+        monitor_kwargs={"info_keywords": ("is_success",)},
+        vec_env_cls=SubprocVecEnv if n_envs > 1 else DummyVecEnv,
+    )
+
+
+@dataclass(frozen=True)
+class TrainResult:
+    folder: Path
+    steps: int
+    wall_time: float
+    final_success: float | None
+
+    def text(self) -> str:
+        success = "n/a" if self.final_success is None else f"{self.final_success:.0%}"
+        return (
+            f"trained {self.steps} steps in {self.wall_time / 60:.1f} min; "
+            f"last evaluation success {success}; run folder {self.folder}"
+        )
+
+
+def versions() -> dict[str, str]:
+    found = {"python": platform.python_version(), "platform": platform.platform()}
+    for name in PACKAGES:
+        try:
+            found[name] = metadata.version(name)
+        except metadata.PackageNotFoundError:
+            found[name] = "not installed"
+    return found
+
+
+def git_commit(where: Path) -> str | None:
+    try:
+        out = subprocess.run(
+            ["git", "rev-parse", "HEAD"], cwd=where, capture_output=True, text=True, check=True
+        )
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain"], cwd=where, capture_output=True, text=True, check=True
+        )
+    except (OSError, subprocess.CalledProcessError):
+        return None
+    return out.stdout.strip() + ("+uncommitted" if dirty.stdout.strip() else "")
+
+
+def run_folder(root: Path, env_id: str, algo: str, seed: int) -> Path:
+    """A new folder ``root/<Task>-<algo>-s<seed>`` (``-2``, ``-3``… if taken)."""
+    base = f"{env_id.split('/')[-1].removesuffix('-v0')}-{algo}-s{seed}"
+    folder = root / base
+    k = 2
+    while folder.exists():
+        folder = root / f"{base}-{k}"
+        k += 1
+    folder.mkdir(parents=True)
+    return folder
+
+
+def train(
+    env_id: str,
+    algo: str,
+    seed: int = 0,
+    config: str | Path | None = None,
+    out: str | Path = "runs/train",
+    steps: int | None = None,
+    n_envs: int | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> TrainResult:
+    """Train and evaluate one agent; see the module docstring for the run folder.
+
+    Args:
+        env_id: a graspenv environment id.
+        algo: ``ppo`` or ``sac``.
+        seed: seeds the algorithm and the environments (evaluation: ``seed + 10_000``).
+        config: hyperparameter file (default ``agents/hyperparams/<algo>.toml``).
+        out: parent of the run folder.
+        steps, n_envs: override the file's ``n_timesteps`` and ``n_envs``.
+        progress: receives a progress line now and then (default: stderr).
+    """
+    import graspenv
+
+    if env_id not in graspenv.ENV_IDS:
+        raise ValueError(
+            f"unknown environment {env_id!r}; expected one of {list(graspenv.ENV_IDS)}"
+        )
+    settings = load_hyperparams(env_id, algo, config)
+    if steps is not None:
+        settings["n_timesteps"] = steps
+    if n_envs is not None:
+        settings["n_envs"] = n_envs
+    if settings["n_envs"] == 0:
+        settings["n_envs"] = len(os.sched_getaffinity(0))
+    if settings["n_timesteps"] < 1 or settings["n_envs"] < 1:
+        raise ValueError("n_timesteps and n_envs must be positive")
+    make_env(env_id, settings["env_kwargs"], settings["env_wrapper"]).close()  # fail early
+
+    import torch
+    from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
+    from stable_baselines3.common.logger import CSVOutputFormat, Logger
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from agents.tensorboard import TensorBoardOutput
+
+    torch.set_num_threads(settings["torch_threads"])
+    folder = run_folder(Path(out), env_id, algo, seed)
+    record: dict[str, Any] = {
+        "env_id": env_id,
+        "algo": algo,
+        "seed": seed,
+        "hyperparams": settings,
+        "hyperparams_file": str(config or "built-in"),
+        "command": sys.argv,
+        "versions": versions(),
+        "git_commit": git_commit(Path(__file__).parent),
+        "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+    }
+    _write_json(folder / "run.json", record)
+
+    n = settings["n_envs"]
+    envs = make_vec_env(env_id, settings, n, seed, folder / "monitor")
+    eval_env = make_vec_env(env_id, settings, 1, seed + 10_000)
+    if settings["normalize"]:
+        gamma = float(settings.get("gamma", 0.99))
+        envs = VecNormalize(envs, gamma=gamma)
+        eval_env = VecNormalize(eval_env, training=False, norm_reward=False, gamma=gamma)
+    model = algorithm(algo)(
+        settings["policy"], envs, seed=seed, verbose=0, **algorithm_kwargs(settings)
+    )
+    model.set_logger(
+        Logger(
+            str(folder),
+            [CSVOutputFormat(str(folder / "progress.csv")), TensorBoardOutput(folder / "tb")],
+        )
+    )
+    evaluation = EvalCallback(
+        eval_env,
+        n_eval_episodes=settings["eval_episodes"],
+        eval_freq=max(settings["eval_freq"] // n, 1),
+        log_path=str(folder),
+        best_model_save_path=str(folder),
+        deterministic=True,
+        verbose=0,
+    )
+    callbacks = CallbackList(
+        [
+            evaluation,
+            CheckpointCallback(
+                max(settings["checkpoint_freq"] // n, 1),
+                str(folder / "checkpoints"),
+                name_prefix="model",
+                save_vecnormalize=True,
+            ),
+            ProgressCallback(settings["n_timesteps"], evaluation, progress),
+        ]
+    )
+    start = time.perf_counter()
+    try:
+        model.learn(settings["n_timesteps"], callback=callbacks)
+    finally:
+        envs.close()
+        eval_env.close()
+    wall = time.perf_counter() - start
+    model.save(folder / "model.zip")
+    if settings["normalize"]:
+        model.get_vec_normalize_env().save(str(folder / "vecnormalize.pkl"))
+    curve = write_learning_curve(folder, env_id, algo)
+    final = float(curve[-1][2]) if curve else None
+    record.update(
+        finished=time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        wall_time_s=round(wall, 1),
+        steps=int(model.num_timesteps),
+        last_eval_success=final,
+    )
+    _write_json(folder / "run.json", record)
+    return TrainResult(folder, int(model.num_timesteps), wall, final)
+
+
+def _write_json(path: Path, data: dict[str, Any]) -> None:
+    path.write_text(json.dumps(data, indent=2, default=str) + "\n")
+
+
+def write_learning_curve(folder: Path, env_id: str, algo: str) -> list[tuple[int, float, float]]:
+    """``evaluations.csv`` and ``learning_curve.png`` from the periodic evaluations
+    (steps, mean return, success rate)."""
+    from agents.plots import line_chart
+
+    path = folder / "evaluations.npz"
+    if not path.is_file():
+        return []
+    data = np.load(path)
+    steps = data["timesteps"]
+    returns = data["results"].mean(axis=1)
+    success = (
+        data["successes"].mean(axis=1) if len(data["successes"]) else np.full(len(steps), np.nan)
+    )
+    rows = [(int(s), float(r), float(p)) for s, r, p in zip(steps, returns, success, strict=True)]
+    lines = ["steps,mean_return,success_rate"] + [f"{s},{r:.4f},{p:.4f}" for s, r, p in rows]
+    (folder / "evaluations.csv").write_text("\n".join(lines) + "\n")
+    name = env_id.split("/")[-1]
+    line_chart(
+        {"success rate": (steps.tolist(), success.tolist())},
+        folder / "learning_curve.png",
+        f"{name}, {algo.upper()}: deterministic evaluation",
+        "training steps",
+        "success rate",
+        ylim=(0.0, 1.0),
+    )
+    return rows
+
+
+class ProgressCallback(BaseCallback):
+    """Reports steps, speed, time left and the last evaluation every ~2 %."""
+
+    def __init__(
+        self, total: int, evaluation: EvalCallback, report: Callable[[str], None] | None
+    ) -> None:
+        super().__init__()
+        self.total, self.evaluation, self.report = total, evaluation, report or _stderr
+        self.start, self.next = 0.0, 0
+
+    def _on_training_start(self) -> None:
+        self.start = time.perf_counter()
+
+    def _on_step(self) -> bool:
+        if self.num_timesteps >= self.next:
+            self.next = self.num_timesteps + max(self.total // 50, 1)
+            self._report()
+        return True
+
+    def _on_training_end(self) -> None:
+        self._report()
+
+    def _report(self) -> None:
+        done, total = self.num_timesteps, self.total
+        elapsed = time.perf_counter() - self.start
+        rate = done / max(elapsed, 1e-9)
+        left = max(total - done, 0) / max(rate, 1e-9)
+        line = (
+            f"[{done}/{total}] {min(100 * done / total, 100):.0f}% · {rate:.0f} steps/s · "
+            f"{elapsed / 60:.1f} min elapsed, {left / 60:.1f} min left"
+        )
+        successes = self.evaluation.evaluations_successes
+        if successes:
+            line += f" · last eval success {np.mean(successes[-1]):.0%}"
+        self.report(line)
+
+
+def _stderr(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)

@@ -127,7 +127,7 @@ def chart_png(summaries: Sequence[dict[str, Any]], path: Path, episodes: int) ->
     """Success (with 95 % whiskers) and grasp quality, one bar per kind of agent
     (scripted, each learned algorithm, random) in each task; where one kind has
     several agents on a task, the best by success is shown."""
-    from agents.plots import bar_chart, write_png
+    from graspenv.plots import bar_chart, write_png
 
     tasks = sorted({s["env_id"] for s in summaries})
     kinds = list(dict.fromkeys(s["kind"] for s in summaries))

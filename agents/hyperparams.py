@@ -15,7 +15,10 @@ algorithm's own constructor arguments plus these run settings:
 - ``checkpoint_freq``: steps between saved checkpoints;
 - ``torch_threads``: threads torch may use (1 keeps the cores for the environments).
 
-``policy_kwargs.activation_fn`` is a name (``tanh``, ``relu``, ``elu``).
+``policy_kwargs.activation_fn`` is a name (``tanh``, ``relu``, ``elu``);
+``replay_buffer_class`` may be ``"HerReplayBuffer"`` (hindsight relabelling, with
+``env_kwargs.obs_mode = "goal"`` and ``policy = "MultiInputPolicy"``), its options in
+``replay_buffer_kwargs``.
 """
 
 from __future__ import annotations
@@ -41,6 +44,7 @@ RUN_KEYS = {
     "torch_threads": 1,
 }
 ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu")
+REPLAY_BUFFERS = ("HerReplayBuffer",)
 
 
 def default_file(algo: str) -> Path:
@@ -89,6 +93,11 @@ def load_hyperparams(env_id: str, algo: str, path: str | Path | None = None) -> 
                     f"{path}: [{section}] {key} must be {type(default).__name__}, got {value!r}"
                 )
             settings[key] = value
+    buffer = settings.get("replay_buffer_class")
+    if buffer is not None and buffer not in REPLAY_BUFFERS:
+        raise ValueError(
+            f"{path}: replay_buffer_class must be one of {list(REPLAY_BUFFERS)}, got {buffer!r}"
+        )
     activation = settings.get("policy_kwargs", {}).get("activation_fn")
     if activation is not None and activation not in ACTIVATIONS:
         raise ValueError(
@@ -118,4 +127,8 @@ def algorithm_kwargs(settings: dict[str, Any]) -> dict[str, Any]:
         policy_kwargs["activation_fn"] = names[policy_kwargs["activation_fn"]]
     if policy_kwargs:
         kwargs["policy_kwargs"] = policy_kwargs
+    if kwargs.get("replay_buffer_class") == "HerReplayBuffer":
+        from stable_baselines3 import HerReplayBuffer
+
+        kwargs["replay_buffer_class"] = HerReplayBuffer
     return kwargs

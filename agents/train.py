@@ -262,7 +262,7 @@ def _write_json(path: Path, data: dict[str, Any]) -> None:
 def write_learning_curve(folder: Path, env_id: str, algo: str) -> list[tuple[int, float, float]]:
     """``evaluations.csv`` and ``learning_curve.png`` from the periodic evaluations
     (steps, mean return, success rate)."""
-    from agents.plots import line_chart
+    from graspenv.plots import line_chart
 
     path = folder / "evaluations.npz"
     if not path.is_file():

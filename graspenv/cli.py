@@ -146,11 +146,49 @@ def _add_gallery(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=_gallery)
 
 
+def _bench(args: argparse.Namespace) -> int:
+    from graspenv.bench.frontier import (
+        QUICK_SCENARIOS,
+        QUICK_SETTINGS,
+        SCENARIOS,
+        SETTINGS,
+        markdown_table,
+        run_bench,
+        write_outputs,
+    )
+
+    settings = args.setting or (QUICK_SETTINGS if args.quick else list(SETTINGS))
+    scenarios = args.scenario or (QUICK_SCENARIOS if args.quick else list(SCENARIOS))
+
+    def progress(line: str) -> None:
+        print(line, file=sys.stderr, flush=True)
+
+    results = run_bench(settings, scenarios, args.config, progress)
+    print(markdown_table(results))
+    for path in write_outputs(results, Path(args.out)):
+        print(f"wrote {path}")
+    return 0
+
+
+def _add_bench(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "bench",
+        help="speed against error: scenarios × settings, CSV, Markdown table and Pareto plot",
+    )
+    p.add_argument("--quick", action="store_true", help="a subset that runs in under 2 minutes")
+    p.add_argument("--setting", action="append", help="one setting (repeatable); default all")
+    p.add_argument("--scenario", action="append", help="one scenario (repeatable); default all")
+    p.add_argument("--config", default=None, help="base scene file (default: built-in)")
+    p.add_argument("--out", default="runs/bench", help="folder for bench.csv, bench.md, pareto.png")
+    p.set_defaults(run=_bench)
+
+
 _COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
     _add_demo,
     _add_interactions,
     _add_replay,
     _add_gallery,
+    _add_bench,
 )
 
 

@@ -1,8 +1,10 @@
 """Small charts drawn with OpenCV (the project's only image library): line charts
-for learning curves and grouped bar charts for the strategy benchmark."""
+(learning curves), grouped bar charts (the strategy benchmark) and speed-against-
+error scatters with their Pareto front (the fidelity benchmark)."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -10,7 +12,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["bar_chart", "line_chart", "write_png"]
+__all__ = ["bar_chart", "line_chart", "pareto_chart", "pareto_front", "write_png"]
 
 # Colour-blind-safe palette (Okabe–Ito), BGR.
 PALETTE = [
@@ -213,3 +215,57 @@ def _write(img: NDArray[np.uint8], path: str | Path | None) -> NDArray[np.uint8]
     if path is not None:
         write_png(img, path)
     return img
+
+
+def pareto_front(points: Sequence[tuple[float, float]]) -> list[int]:
+    """Indices of the points no other point beats on both speed (x, higher is
+    better) and error (y, lower is better), in increasing x."""
+    order = sorted(range(len(points)), key=lambda i: (-points[i][0], points[i][1]))
+    front, best = [], np.inf
+    for i in order:
+        y = points[i][1]
+        if np.isfinite(y) and y < best:
+            front.append(i)
+            best = y
+    return sorted(front, key=lambda i: points[i][0])
+
+
+def pareto_chart(
+    labels: Sequence[str],
+    points: Sequence[tuple[float, float]],
+    path: str | Path | None,
+    title: str,
+    xlabel: str,
+    ylabel: str,
+    size: tuple[int, int] = (760, 460),
+) -> NDArray[np.uint8]:
+    """Scatter of (speed, error) with a logarithmic speed axis; the Pareto front is
+    joined and labelled. Written as PNG when ``path`` is given."""
+    finite = [(x, y) for x, y in points if x > 0 and np.isfinite(y)]
+    xs = np.log10([x for x, _ in finite] or [1.0])
+    ys = [y for _, y in finite] or [1.0]
+    span = max(float(xs.max() - xs.min()), 0.3)
+    xlim = (float(xs.min()) - 0.08 * span, float(xs.max()) + 0.25 * span)
+    axes = _Axes(size, xlim, (0.0, 1.12 * max(max(ys), 1e-9)))
+    axes.frame(title, xlabel, ylabel, xticks=False)
+    for value in (0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000):
+        lx = math.log10(value)
+        if xlim[0] <= lx <= xlim[1]:
+            column = axes.x(lx)
+            cv2.line(axes.img, (column, axes.top), (column, axes.height - axes.bottom), GRID)
+            _text(axes.img, f"{value:g}", (column, axes.height - axes.bottom + 14), anchor="centre")
+    front = pareto_front(points)
+    placed = [(axes.x(math.log10(points[i][0])), axes.y(points[i][1])) for i in front]
+    if len(placed) > 1:
+        cv2.polylines(axes.img, [np.array(placed, np.int32)], False, PALETTE[1], 2, cv2.LINE_AA)
+    for i, (x, y) in enumerate(points):
+        if x <= 0 or not np.isfinite(y):
+            continue
+        p = (axes.x(math.log10(x)), axes.y(y))
+        on_front = i in front
+        cv2.circle(
+            axes.img, p, 5 if on_front else 3, PALETTE[1] if on_front else INK, -1, cv2.LINE_AA
+        )
+        if on_front:
+            _text(axes.img, labels[i], (p[0] + 7, p[1] - 8), 0.38)
+    return _write(axes.img, path)

@@ -1,0 +1,601 @@
+"""``graspenv bench``: speed against error.
+
+Every scenario plays a scripted synthetic hand through the whole pipeline (render →
+contours → tracking → proxies → Bullet) and measures what it did against ground
+truth (DESIGN.md, "How we measure"):
+
+- ``turn``: two fingertips squeeze a 6 cm box and turn 90° in place (the canonical
+  scene). Ideal rigid grasp: the box turns with the fingers about its own centre.
+  Errors: yaw (degrees) and centre drift (mm).
+- ``slide``: the same grasp slides 10 cm. Error: travel against the fingers' (mm).
+- ``slip``: the box is squeezed and held while a side force grows by
+  :data:`SLIP_RATE` N/s until it slips (1 mm). Coulomb's prediction from the
+  measured normal forces: ``μ_f·ΣN_fingers + μ_t·N_table`` with the products of the
+  friction coefficients Bullet uses. Error: relative (%).
+- ``flick``: a fingertip strikes the box's side at 0.25 m/s and lifts. No closed form:
+  error is the drift against the reference-fidelity run (mm).
+- ``two hands``: ten fingertips, five per hand, each hand squeezing a box and
+  carrying it 8 cm, the hands in opposite directions. Error: travel (mm).
+- ``noisy``: the turn, with blurred, jittered masks with holes (seeded). Error: yaw.
+
+Every scenario also gives the contour-point tracking error: for each particle that
+continues from one frame to the next, its contour point against where the finger's
+true rigid motion takes the previous point (RMS, mm and pixels); and the drift of
+the final object poses against the same scenario at :data:`REFERENCE` fidelity.
+
+Speed: camera frames per second of :meth:`Simulation.step` (the pipeline; rendering
+the synthetic mask is not counted) and of each of its stages, the real-time factor
+against the scene's camera rate, and the share of frame time inside Bullet's own
+``stepSimulation``. Each setting is the default scene with one knob changed (a
+one-at-a-time sweep) plus the named presets.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import time
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
+from graspenv.geometry import yaw_of
+from graspenv.simulation import Simulation
+from graspenv.surface.hand import Hand
+from graspenv.surface.noise import SensorNoise
+from graspenv.surface.render import render_mask
+from graspenv.surface.scripts import FingerMotion, Phase, Script, side_strike
+from graspenv.surface.shapes import Fingertip
+
+__all__ = [
+    "QUICK_SETTINGS",
+    "REFERENCE",
+    "SCENARIOS",
+    "SETTINGS",
+    "Result",
+    "run_bench",
+]
+
+FINGER_RADIUS = 0.008
+CLEARANCE = 0.004
+DEPTH = 0.003
+BOX = ObjectConfig(name="box", shape="box", size=(0.06, 0.06, 0.03), mass=0.2)
+SLIP_RATE = 4.0  # newtons per second
+SLIP_DISTANCE = 0.0005  # metres the box moves relative to the gripping particles
+
+#: The reference fidelity: every knob at its most accurate swept value.
+REFERENCE: dict[str, dict[str, Any]] = {
+    "physics": {"substeps": 8, "solver_iterations": 100},
+    "contacts": {"spacing": 0.002},
+}
+
+
+@dataclass
+class Played:
+    """What one scripted run measured."""
+
+    frames: int = 0
+    stage_seconds: dict[str, float] = field(default_factory=dict)
+    particles: list[int] = field(default_factory=list)
+    tracking_sq: list[float] = field(default_factory=list)
+    final: dict[str, NDArray[np.float64]] = field(default_factory=dict)
+    errors: dict[str, float] = field(default_factory=dict)
+
+    def add_timings(self, timings: dict[str, float]) -> None:
+        for stage, seconds in timings.items():
+            self.stage_seconds[stage] = self.stage_seconds.get(stage, 0.0) + seconds
+
+
+def _nearest_shape(hand: Hand, points: NDArray[np.float64]) -> list[str]:
+    names = [name for name, _shape, down in hand if down]
+    if not names:
+        return []
+    distance = np.stack([np.abs(hand[n].signed_distance(points)) for n in names])
+    return [names[i] for i in distance.argmin(axis=0)]
+
+
+def _tracking_errors(
+    hand: Hand,
+    dt: float,
+    before: dict[int, NDArray[np.float64]],
+    after: dict[int, NDArray[np.float64]],
+) -> list[float]:
+    """Squared errors (m²) of continuing particles against the true finger motion."""
+    common = sorted(set(before) & set(after))
+    if not common:
+        return []
+    points = np.array([before[i] for i in common])
+    now = np.array([after[i] for i in common])
+    moved = points.copy()
+    shapes = _nearest_shape(hand, points)
+    for name in set(shapes):
+        rows = [k for k, s in enumerate(shapes) if s == name]
+        moved[rows] += hand.displacement(name, points[rows], dt)
+    return list(np.sum((now - moved) ** 2, axis=1))
+
+
+def play(
+    scene: SceneConfig,
+    script: Script,
+    objects: Sequence[str],
+    tracked_phases: Iterable[str] = (),
+    noise: SensorNoise | None = None,
+    each_frame: Callable[[Simulation, int, Played], bool] | None = None,
+    extra_frames: int = 0,
+) -> Played:
+    """Play a script through a fresh simulation, timing each stage.
+
+    Args:
+        scene: the scene (its objects must include ``objects``).
+        script: the scripted hand.
+        objects: the objects whose final poses are kept.
+        tracked_phases: phases in which the tracking error is measured (the finger
+            shapes must move rigidly there: no touch-downs or presses).
+        noise: sensor noise applied to every mask (seeded per run).
+        each_frame: called after every frame; returning True ends the run.
+        extra_frames: empty frames after the script.
+    """
+    result = Played()
+    rng = np.random.default_rng(0)
+    tracked = {
+        i for name, frames in script.phase_ranges() if name in tracked_phases for i in frames
+    }
+    with Simulation(scene) as sim:
+        dt = sim.surface.dt
+        hands: list[Hand | None] = [hand for _, hand in script.frames(sim.surface)]
+        empty = np.zeros(sim.surface.shape, np.uint8)
+        previous: dict[int, NDArray[np.float64]] = {}
+        for index, hand in enumerate(hands + [None] * extra_frames):
+            mask = empty if hand is None else render_mask(hand, sim.surface)
+            if noise is not None and hand is not None:
+                mask = noise.apply(mask, rng)
+            report = sim.step(mask)
+            result.frames += 1
+            result.add_timings(report.timings)
+            result.particles.append(report.n_particles)
+            command = report.command
+            now = (
+                {int(p): command.targets[k] for k, p in enumerate(command.particles[:, 0])}
+                if command.particles.size
+                else {}
+            )
+            if index - 1 in tracked and index in tracked:
+                before_hand = hands[index - 1]
+                assert before_hand is not None
+                result.tracking_sq += _tracking_errors(before_hand, dt, previous, now)
+            previous = now
+            if each_frame is not None and each_frame(sim, index, result):
+                break
+        for name in objects:
+            position, q = sim.object_pose(name)
+            result.final[name] = np.array([*position, yaw_of(q)])
+    return result
+
+
+# -- scenarios ---------------------------------------------------------------------------
+
+
+def tilt_of(q: NDArray[np.float64]) -> float:
+    """Angle between a body's z axis and the world's, radians."""
+    x, y = float(q[0]), float(q[1])
+    return math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (x * x + y * y))))
+
+
+def _with(base: SceneConfig, *objects: ObjectConfig) -> SceneConfig:
+    return base.replace(objects=[to_dict(o) for o in objects])
+
+
+def _pinch(obj: ObjectConfig, depth: float = DEPTH, **kwargs: Any) -> Script:
+    from graspenv.surface.scripts import two_finger_pinch
+
+    return two_finger_pinch(
+        centre=obj.position,
+        gap=obj.size[0] + 2 * CLEARANCE,
+        finger_radius=FINGER_RADIUS,
+        approach=CLEARANCE + depth,
+        **kwargs,
+    )
+
+
+def turn(base: SceneConfig, noise: SensorNoise | None = None) -> Played:
+    script = _pinch(BOX, turn=math.pi / 2, turn_frames=90, slide_frames=0, hold_frames=15)
+    played = play(_with(base, BOX), script, ["box"], ("turn", "hold"), noise)
+    x, y, _, yaw = played.final["box"]
+    played.errors["yaw_error_deg"] = math.degrees(math.remainder(yaw - math.pi / 2, 2 * math.pi))
+    played.errors["drift_mm"] = 1000 * math.hypot(x, y)
+    return played
+
+
+def slide(base: SceneConfig) -> Played:
+    script = _pinch(BOX, slide=(0.0, 0.10), turn_frames=0, slide_frames=90, hold_frames=15)
+    played = play(_with(base, BOX), script, ["box"], ("slide", "hold"))
+    x, y, _, yaw = played.final["box"]
+    played.errors["travel_error_mm"] = 1000 * math.hypot(x, y - 0.10)
+    played.errors["yaw_drift_deg"] = math.degrees(yaw)
+    return played
+
+
+#: The slip scenario's box is flat, so that the side force (applied at its centre of
+#: mass, 4 mm up) cannot tip it over the grip's contacts (2 mm up) before it slips.
+FLAT_BOX = ObjectConfig(name="box", shape="box", size=(0.06, 0.06, 0.008), mass=0.2)
+
+
+def slip(base: SceneConfig) -> Played:
+    """Squeeze a flat box lightly, settle, then push it along +y (across the grip)
+    with a growing force until it slips: moves :data:`SLIP_DISTANCE` relative to the
+    particles gripping it (they give elastically with the box before it slips)."""
+    settle = 20
+    script = _pinch(FLAT_BOX, turn_frames=0, slide_frames=0, hold_frames=settle + 300, depth=0.001)
+    scene = _with(base, FLAT_BOX)
+    hold_start = sum(
+        len(frames) for name, frames in script.phase_ranges() if name in ("touch", "squeeze")
+    )
+    ramp_start = hold_start + settle
+    dt = 1.0 / scene.surface.fps
+    state: dict[str, Any] = {"normal": [], "table": [], "start": None, "force": math.nan}
+
+    def each(sim: Simulation, index: int, played: Played) -> bool:
+        if hold_start <= index < ramp_start:
+            report = sim.contact_report("box")
+            fingers = report.particle >= 0
+            table = (report.particle < 0) & (report.other_object < 0)
+            state["normal"].append(float(report.normal_force[fingers].sum()))
+            state["table"].append(float(report.normal_force[table].sum()))
+        if index + 1 >= ramp_start:
+            position, _ = sim.object_pose("box")
+            if state["start"] is None:
+                report = sim.contact_report("box")
+                ids = np.unique(report.particle[report.particle >= 0])
+                state["ids"] = ids
+                state["start"] = position[:2].copy()
+                state["grip_start"] = sim.world.pool.positions(ids)[:, :2].mean(axis=0)
+            force = SLIP_RATE * (index + 1 - ramp_start) * dt
+            grip = sim.world.pool.positions(state["ids"])[:, :2].mean(axis=0)
+            relative = (position[:2] - state["start"]) - (grip - state["grip_start"])
+            if np.linalg.norm(relative) > SLIP_DISTANCE:
+                state["force"] = force
+                state["tilt"] = math.degrees(tilt_of(sim.object_pose("box")[1]))
+                return True
+            sim.apply_force("box", (0.0, SLIP_RATE * (index + 2 - ramp_start) * dt, 0.0))
+        return False
+
+    played = play(scene, script, ["box"], (), each_frame=each)
+    # Bullet's combined friction is the product of the two bodies' coefficients.
+    finger_mu = base.proxy.particle_friction * BOX.friction
+    table_mu = base.physics.table_friction * BOX.friction
+    # Mean normal forces (newtons, from the last sub-step of each frame) over the hold.
+    normal = float(np.mean(state["normal"]))
+    table = float(np.mean(state["table"]))
+    predicted = finger_mu * normal + table_mu * table
+    played.errors["grip_normal_n"] = normal
+    played.errors["tilt_at_slip_deg"] = state.get("tilt", math.nan)
+    played.errors["slip_force_n"] = state["force"]
+    played.errors["coulomb_force_n"] = predicted
+    played.errors["slip_error_pct"] = 100 * (state["force"] - predicted) / predicted
+    return played
+
+
+def flick(base: SceneConfig) -> Played:
+    script = side_strike(
+        (-0.03, 0.0), 0.0, FINGER_RADIUS, clearance=0.01, depth=0.01, strike_frames=5
+    )
+    return play(_with(base, BOX), script, ["box"], ("strike",), extra_frames=40)
+
+
+def _five_finger_hand(hand: Hand, prefix: str, centre: tuple[float, float], half: float) -> None:
+    """Five lifted fingertips around a box: two on each side face, one below."""
+    gap = half + CLEARANCE + FINGER_RADIUS
+    cx, cy = centre
+    spots = [(-gap, -0.015), (-gap, 0.015), (gap, -0.015), (gap, 0.015), (0.0, -gap)]
+    for k, (dx, dy) in enumerate(spots):
+        tip = Fingertip((cx + dx, cy + dy), 0.0, radii=(FINGER_RADIUS, FINGER_RADIUS))
+        hand.add(f"{prefix}{k}", tip, touching=False)
+
+
+def two_hands(base: SceneConfig) -> Played:
+    """Ten fingertips: each hand squeezes its own box and carries it 8 cm."""
+    left = ObjectConfig(
+        name="left", shape="box", size=(0.06, 0.06, 0.03), mass=0.2, position=(-0.1, 0.0)
+    )
+    right = ObjectConfig(
+        name="right", shape="box", size=(0.06, 0.06, 0.03), mass=0.2, position=(0.1, 0.0)
+    )
+    hand = Hand()
+    _five_finger_hand(hand, "l", left.position, 0.03)
+    _five_finger_hand(hand, "r", right.position, 0.03)
+    names = [name for name, _shape, _down in hand]
+    squeeze = {}
+    for name in names:
+        centre = left.position if name.startswith("l") else right.position
+        inward = np.asarray(centre) - hand[name].centre
+        inward *= (CLEARANCE + DEPTH) / np.linalg.norm(inward)
+        squeeze[name] = FingerMotion(
+            touching=True, translation=(float(inward[0]), float(inward[1]))
+        )
+    carry = {
+        name: FingerMotion(
+            touching=True, translation=(0.0, 0.08 if name.startswith("l") else -0.08)
+        )
+        for name in names
+    }
+    script = Script(
+        hand,
+        [
+            Phase(5, {n: FingerMotion(touching=True) for n in names}, name="touch"),
+            Phase(20, squeeze, name="squeeze"),
+            Phase(90, carry, name="carry"),
+            Phase(15, {n: FingerMotion(touching=True) for n in names}, name="hold"),
+        ],
+    )
+    played = play(_with(base, left, right), script, ["left", "right"], ("carry", "hold"))
+    errors = [
+        math.hypot(played.final["left"][0] + 0.1, played.final["left"][1] - 0.08),
+        math.hypot(played.final["right"][0] - 0.1, played.final["right"][1] + 0.08),
+    ]
+    played.errors["travel_error_mm"] = 1000 * max(errors)
+    return played
+
+
+NOISE = SensorNoise(blur_sigma=1.0, holes=2, hole_radius=2.0, jitter=0.7, jitter_scale=6.0)
+
+
+def noisy(base: SceneConfig) -> Played:
+    return turn(base, NOISE)
+
+
+#: name → scenario; each returns a :class:`Played` with its ground-truth errors.
+SCENARIOS: dict[str, Callable[[SceneConfig], Played]] = {
+    "turn": turn,
+    "slide": slide,
+    "slip": slip,
+    "flick": flick,
+    "two hands": two_hands,
+    "noisy": noisy,
+}
+
+# -- settings ----------------------------------------------------------------------------
+
+
+def _knob(section: str, key: str, values: Iterable[Any], fmt: str = "{}") -> dict[str, Any]:
+    return {f"{key}={fmt.format(v)}": {section: {key: v}} for v in values}
+
+
+#: label → section overrides of the default scene: a one-at-a-time sweep.
+SETTINGS: dict[str, dict[str, dict[str, Any]]] = {
+    "default": {},
+    **_knob("surface", "resolution", [(320, 240), (1280, 960)], "{0[0]}x{0[1]}"),
+    **_knob("contacts", "spacing", [0.002, 0.003, 0.006], "{:.3f}"),
+    **_knob("proxy", "window", [2, 8]),
+    **_knob("proxy", "matcher", ["exhaustive", "fast"]),
+    **_knob("physics", "substeps", [1, 2, 8]),
+    **_knob("physics", "solver_iterations", [10, 25, 100]),
+    **_knob("proxy", "stack_layers", [2, 3]),
+    **_knob("proxy", "method", ["instant", "rigid"]),
+    "reference": REFERENCE,
+}
+
+#: The ``--quick`` subset: under two minutes on two cores.
+QUICK_SETTINGS = (
+    "default",
+    "resolution=320x240",
+    "spacing=0.006",
+    "matcher=fast",
+    "substeps=2",
+    "solver_iterations=10",
+    "method=instant",
+    "reference",
+)
+QUICK_SCENARIOS = ("turn", "slide", "slip", "two hands")
+
+
+@dataclass(frozen=True)
+class Result:
+    """One scenario at one setting: errors, speed and stage shares."""
+
+    setting: str
+    scenario: str
+    frames: int
+    fps: float
+    realtime: float
+    bullet_share: float
+    stage_fps: dict[str, float]
+    mean_particles: float
+    tracking_rms_mm: float
+    tracking_rms_px: float
+    reference_drift_mm: float
+    errors: dict[str, float]
+
+    def row(self) -> dict[str, Any]:
+        row: dict[str, Any] = {
+            "setting": self.setting,
+            "scenario": self.scenario,
+            "frames": self.frames,
+            "fps": round(self.fps, 1),
+            "realtime": round(self.realtime, 2),
+            "bullet_share": round(self.bullet_share, 3),
+            "mean_particles": round(self.mean_particles, 1),
+            "tracking_rms_mm": round(self.tracking_rms_mm, 4),
+            "tracking_rms_px": round(self.tracking_rms_px, 3),
+            "reference_drift_mm": round(self.reference_drift_mm, 3),
+        }
+        row.update({f"fps_{k}": round(v, 1) for k, v in self.stage_fps.items()})
+        row.update({k: round(v, 4) for k, v in self.errors.items()})
+        return row
+
+
+def scene_for(base: SceneConfig, overrides: dict[str, dict[str, Any]]) -> SceneConfig:
+    """The base scene with whole-section overrides merged key by key."""
+    sections = {
+        name: {**to_dict(getattr(base, name)), **values} for name, values in overrides.items()
+    }
+    return base.replace(**sections)
+
+
+def measure(
+    setting: str, scenario: str, scene: SceneConfig, reference: Played | None
+) -> tuple[Result, Played]:
+    start = time.perf_counter()
+    played = SCENARIOS[scenario](scene)
+    del start
+    total = sum(played.stage_seconds.values())
+    fps = played.frames / total
+    camera = scene.surface.fps
+    metres_per_pixel = scene.surface.size[0] / scene.surface.resolution[0]
+    rms = math.sqrt(float(np.mean(played.tracking_sq))) if played.tracking_sq else math.nan
+    drift = math.nan
+    # The slip run stops when the box slips, so its final pose is not comparable.
+    if reference is not None and scenario != "slip":
+        drift = 1000 * max(
+            float(np.linalg.norm(played.final[name][:2] - reference.final[name][:2]))
+            for name in played.final
+        )
+    return (
+        Result(
+            setting=setting,
+            scenario=scenario,
+            frames=played.frames,
+            fps=fps,
+            realtime=fps / camera,
+            bullet_share=played.stage_seconds["physics"] / total,
+            stage_fps={k: played.frames / max(v, 1e-12) for k, v in played.stage_seconds.items()},
+            mean_particles=float(np.mean(played.particles)),
+            tracking_rms_mm=1000 * rms,
+            tracking_rms_px=rms / metres_per_pixel,
+            reference_drift_mm=drift,
+            errors=played.errors,
+        ),
+        played,
+    )
+
+
+def run_bench(
+    settings: Sequence[str],
+    scenarios: Sequence[str],
+    config: str | SceneConfig | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> list[Result]:
+    """Every scenario at the reference fidelity first, then at every setting."""
+    for name in settings:
+        if name not in SETTINGS:
+            raise ValueError(f"unknown setting {name!r}; expected one of {list(SETTINGS)}")
+    for name in scenarios:
+        if name not in SCENARIOS:
+            raise ValueError(f"unknown scenario {name!r}; expected one of {list(SCENARIOS)}")
+    base = load_config(config)
+    references: dict[str, Played] = {}
+    results = []
+    order = ["reference"] + [s for s in settings if s != "reference"]
+    total = len(order) * len(scenarios)
+    done = 0
+    for setting in order:
+        scene = scene_for(base, SETTINGS[setting])
+        for scenario in scenarios:
+            done += 1
+            if progress is not None:
+                progress(f"[{done}/{total}] {scenario} at {setting}")
+            result, played = measure(setting, scenario, scene, references.get(scenario))
+            if setting == "reference":
+                references[scenario] = played
+                result = measure_reference_row(result)
+            if setting in settings:
+                results.append(result)
+    return results
+
+
+def measure_reference_row(result: Result) -> Result:
+    """The reference against itself drifts by 0 by definition (slip: not measured)."""
+    drift = math.nan if result.scenario == "slip" else 0.0
+    return Result(**{**result.__dict__, "reference_drift_mm": drift})
+
+
+# -- output ------------------------------------------------------------------------------
+
+
+def write_csv(results: Sequence[Result], path: Path) -> Path:
+    rows = [r.row() for r in results]
+    fields = list(dict.fromkeys(k for row in rows for k in row))
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=fields)
+        writer.writeheader()
+        writer.writerows(rows)
+    return path
+
+
+HEADLINE = {
+    "turn": "yaw_error_deg",
+    "slide": "travel_error_mm",
+    "slip": "slip_error_pct",
+    "flick": None,
+    "two hands": "travel_error_mm",
+    "noisy": "yaw_error_deg",
+}
+
+
+def markdown_table(results: Sequence[Result]) -> str:
+    """One row per setting and scenario: speed, Bullet's share, errors."""
+    lines = [
+        "| setting | scenario | frames/s | × real time | Bullet share | particles "
+        "| tracking RMS (mm / px) | error vs ground truth | drift vs reference (mm) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for r in results:
+        key = HEADLINE[r.scenario]
+        truth = "—" if key is None else f"{key} {r.errors[key]:+.2f}"
+        lines.append(
+            f"| {r.setting} | {r.scenario} | {r.fps:.0f} | {r.realtime:.1f} | "
+            f"{100 * r.bullet_share:.0f} % | {r.mean_particles:.0f} | "
+            f"{r.tracking_rms_mm:.2f} / {r.tracking_rms_px:.2f} | {truth} | "
+            f"{r.reference_drift_mm:.2f} |"
+        )
+    return "\n".join(lines)
+
+
+def pareto_png(results: Sequence[Result], path: Path) -> Path:
+    """Two panels, one point per setting, speed = the canonical turn's real-time
+    factor: its |yaw error| against ground truth, and the mean drift of every
+    scenario's final poses against the reference fidelity."""
+    from graspenv.plots import pareto_chart, write_png
+
+    settings = list(dict.fromkeys(r.setting for r in results))
+    by = {(r.setting, r.scenario): r for r in results}
+    kept = [s for s in settings if (s, "turn") in by]
+    speed = [by[s, "turn"].realtime for s in kept]
+    yaw = [abs(by[s, "turn"].errors["yaw_error_deg"]) for s in kept]
+    drift = [
+        float(np.nanmean([r.reference_drift_mm for r in results if r.setting == s])) for s in kept
+    ]
+    top = pareto_chart(
+        kept,
+        list(zip(speed, yaw, strict=True)),
+        None,
+        "Canonical turn: speed against error (front joined)",
+        "x real time (60 Hz camera), log scale",
+        "|yaw error| (deg)",
+    )
+    bottom = pareto_chart(
+        kept,
+        list(zip(speed, drift, strict=True)),
+        None,
+        "Every scenario: drift of final poses against the reference fidelity",
+        "x real time of the canonical turn, log scale",
+        "mean drift (mm)",
+    )
+    return write_png(np.vstack([top, bottom]), path)
+
+
+def write_outputs(results: Sequence[Result], out: Path) -> list[Path]:
+    """``bench.csv``, ``bench.md`` and ``pareto.png`` in ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    table = markdown_table(results)
+    (out / "bench.md").write_text(table + "\n")
+    return [
+        write_csv(results, out / "bench.csv"),
+        out / "bench.md",
+        pareto_png(results, out / "pareto.png"),
+    ]

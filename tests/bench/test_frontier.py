@@ -1,0 +1,80 @@
+"""The speed-against-error bench: its ground-truth measurements and its outputs.
+
+These check what the bench measures (not how fast: speed is never asserted in a
+test on a shared machine)."""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import cv2
+import pytest
+
+from graspenv.bench.frontier import (
+    SCENARIOS,
+    SETTINGS,
+    run_bench,
+    scene_for,
+    slip,
+    turn,
+    write_outputs,
+)
+from graspenv.config import SceneConfig, load_config
+from graspenv.plots import pareto_front
+
+
+@pytest.fixture(scope="module")
+def base() -> SceneConfig:
+    return load_config(None)
+
+
+def test_slip_force_matches_coulomb(base: SceneConfig) -> None:
+    """A squeezed box slips when the side force reaches μ·N (fingers + table)."""
+    errors = slip(base).errors
+    assert errors["grip_normal_n"] > 1.0  # the box is really squeezed
+    assert abs(errors["slip_error_pct"]) < 15.0, errors
+    assert errors["tilt_at_slip_deg"] < 1.0  # it slid, it did not tip
+
+
+def test_weaker_friction_slips_sooner(base: SceneConfig) -> None:
+    """Half the particle friction: the grip gives way at a smaller force."""
+    low = scene_for(base, {"proxy": {"particle_friction": 1.0}})
+    assert slip(low).errors["slip_force_n"] < 0.75 * slip(base).errors["slip_force_n"]
+
+
+def test_turn_tracks_the_fingers(base: SceneConfig) -> None:
+    played = turn(base)
+    assert abs(played.errors["yaw_error_deg"]) < 1.0
+    rms = math.sqrt(sum(played.tracking_sq) / len(played.tracking_sq))
+    assert rms < 0.001  # metres: contour points follow the true finger motion
+    assert set(played.stage_seconds) == {"sensing", "matching", "control", "physics"}
+
+
+def test_bench_writes_csv_table_and_pareto_plot(tmp_path: Path) -> None:
+    results = run_bench(["default", "substeps=2"], ["turn"])
+    assert [r.setting for r in results] == ["default", "substeps=2"]
+    assert all(r.fps > 0 and 0 < r.bullet_share < 1 for r in results)
+    files = write_outputs(results, tmp_path)
+    with (tmp_path / "bench.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert {r["setting"] for r in rows} == {"default", "substeps=2"}
+    assert float(rows[0]["reference_drift_mm"]) >= 0
+    assert "| default | turn |" in (tmp_path / "bench.md").read_text()
+    picture = cv2.imread(str(tmp_path / "pareto.png"))
+    assert picture is not None and picture.shape[0] > picture.shape[1] / 2
+    assert len(files) == 3
+
+
+def test_unknown_names_are_refused() -> None:
+    with pytest.raises(ValueError, match="unknown setting"):
+        run_bench(["warp speed"], ["turn"])
+    with pytest.raises(ValueError, match="unknown scenario"):
+        run_bench(["default"], ["juggling"])
+    assert "reference" in SETTINGS and "turn" in SCENARIOS
+
+
+def test_pareto_front_keeps_only_unbeaten_points() -> None:
+    points = [(1.0, 5.0), (2.0, 3.0), (3.0, 4.0), (4.0, 1.0), (0.5, 0.5), (5.0, math.nan)]
+    assert pareto_front(points) == [4, 3]

@@ -13,7 +13,10 @@ algorithm's own constructor arguments plus these run settings:
 - ``env_wrapper``: a name from :data:`agents.wrappers.WRAPPERS`;
 - ``eval_freq``, ``eval_episodes``: periodic deterministic evaluation (steps, episodes);
 - ``checkpoint_freq``: steps between saved checkpoints;
-- ``torch_threads``: threads torch may use (1 keeps the cores for the environments).
+- ``torch_threads``: threads torch may use (1 keeps the cores for the environments);
+- ``demonstrations``, ``demo_episodes``: off-policy algorithms only: before training,
+  fill the replay buffer with this many episodes of a scripted strategy
+  (``"scripted:NAME"``), seeded apart from training and evaluation.
 
 ``policy_kwargs.activation_fn`` is a name (``tanh``, ``relu``, ``elu``);
 ``replay_buffer_class`` may be ``"HerReplayBuffer"`` (hindsight relabelling, with
@@ -42,6 +45,8 @@ RUN_KEYS = {
     "eval_episodes": 10,
     "checkpoint_freq": 50_000,
     "torch_threads": 1,
+    "demonstrations": "",
+    "demo_episodes": 0,
 }
 ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu")
 REPLAY_BUFFERS = ("HerReplayBuffer",)
@@ -93,6 +98,10 @@ def load_hyperparams(env_id: str, algo: str, path: str | Path | None = None) -> 
                     f"{path}: [{section}] {key} must be {type(default).__name__}, got {value!r}"
                 )
             settings[key] = value
+    if settings["demo_episodes"] and not settings["demonstrations"].startswith("scripted:"):
+        raise ValueError(f"{path}: demonstrations must name a scripted:STRATEGY")
+    if settings["demo_episodes"] and algo == "ppo":
+        raise ValueError(f"{path}: demonstrations need an off-policy algorithm (sac)")
     buffer = settings.get("replay_buffer_class")
     if buffer is not None and buffer not in REPLAY_BUFFERS:
         raise ValueError(

@@ -206,6 +206,15 @@ def train(
     model = algorithm(algo)(
         settings["policy"], envs, seed=seed, verbose=0, **algorithm_kwargs(settings)
     )
+    if settings["demo_episodes"]:
+        demos = prefill(model, env_id, settings, seed + 20_000)
+        record["demonstrations"] = demos
+        _write_json(folder / "run.json", record)
+        (progress or _stderr)(
+            f"replay buffer filled with {settings['demo_episodes']} episodes of "
+            f"{settings['demonstrations']} ({demos['transitions']} transitions, "
+            f"{demos['successes']} successes)"
+        )
     model.set_logger(
         Logger(
             str(folder),
@@ -253,6 +262,44 @@ def train(
     )
     _write_json(folder / "run.json", record)
     return TrainResult(folder, int(model.num_timesteps), wall, final)
+
+
+def prefill(model: Any, env_id: str, settings: dict[str, Any], first_seed: int) -> dict[str, int]:
+    """Play ``demo_episodes`` episodes of the scripted strategy and add every
+    transition to the model's replay buffer (what the policy will see: the same
+    environment arguments and wrapper)."""
+    from agents.evaluate import load_agent
+
+    spec = load_agent(settings["demonstrations"])
+    env = make_env(env_id, settings["env_kwargs"], settings["env_wrapper"])
+    agent = spec.build(env)
+    transitions = successes = 0
+    try:
+        for episode in range(settings["demo_episodes"]):
+            obs, info = env.reset(seed=first_seed + episode)
+            agent.reset()
+            done = False
+            while not done:
+                action, _ = agent.predict(obs)
+                next_obs, reward, terminated, truncated, info = env.step(action)
+                model.replay_buffer.add(
+                    np.asarray(obs)[None],
+                    np.asarray(next_obs)[None],
+                    np.asarray(action)[None],
+                    np.array([reward]),
+                    np.array([terminated]),
+                    [{"TimeLimit.truncated": truncated and not terminated}],
+                )
+                obs, done = next_obs, terminated or truncated
+                transitions += 1
+            successes += bool(info["is_success"])
+    finally:
+        env.close()
+    return {
+        "episodes": settings["demo_episodes"],
+        "transitions": transitions,
+        "successes": successes,
+    }
 
 
 def _write_json(path: Path, data: dict[str, Any]) -> None:

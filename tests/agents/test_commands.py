@@ -81,6 +81,8 @@ BAD_HYPERPARAMS = {
     "wrong type": '[defaults]\nn_envs = "two"',
     "not a table": "n_steps = 64",
     "bad activation": '[defaults]\npolicy_kwargs = { activation_fn = "sigmoidish" }',
+    "demos for ppo": '[defaults]\ndemonstrations = "scripted:pinch-and-turn"\ndemo_episodes = 5',
+    "demos not scripted": '[defaults]\ndemonstrations = "random"\ndemo_episodes = 5',
 }
 
 

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from agents.hyperparams import algorithm_kwargs, default_file, load_hyperparams
-from agents.plots import bar_chart, line_chart
 from agents.tensorboard import EventFileWriter, crc32c, read_scalars
 from agents.wrappers import RelativeGoal
+from graspenv.plots import bar_chart, line_chart
 
 
 def test_environment_table_overrides_defaults(tmp_path: Path) -> None:

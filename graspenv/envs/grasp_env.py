@@ -26,6 +26,7 @@ from graspenv.config import (
     ConfigError,
     SceneConfig,
     build_section,
+    choose_fidelity,
     read_config_file,
     scene_from,
 )
@@ -142,7 +143,8 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
     ``obs_mode``, ``action_mode`` (default: the task's), ``render_mode``
     (``rgb_array``: top-down picture; ``rgb_array_3d``: PyBullet's software camera),
     ``config`` (an environment file or dict), ``fidelity`` (``fast``, ``default``,
-    ``reference``).
+    ``reference``, or ``auto``: the cheapest preset whose measured drift against the
+    reference is within ``error_budget`` millimetres; see ``PRESET_DRIFT_MM``).
 
     ## Version History
 
@@ -163,6 +165,7 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         render_mode: str | None = None,
         config: str | Path | Mapping[str, Any] | None = None,
         fidelity: str = "default",
+        error_budget: float | None = None,
     ) -> None:
         from graspenv.tasks.library import TASKS
 
@@ -179,8 +182,17 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
                 f"render_mode must be one of {self.metadata['render_modes']} or None, "
                 f"got {render_mode!r}"
             )
+        if fidelity == "auto":
+            if error_budget is None:
+                raise ValueError("fidelity='auto' needs error_budget (mm of drift)")
+            fidelity = choose_fidelity(error_budget)
+        elif error_budget is not None:
+            raise ValueError("error_budget is only used with fidelity='auto'")
         if fidelity not in FIDELITY_PRESETS:
-            raise ValueError(f"fidelity must be one of {list(FIDELITY_PRESETS)}, got {fidelity!r}")
+            raise ValueError(
+                f"fidelity must be one of {[*FIDELITY_PRESETS, 'auto']}, got {fidelity!r}"
+            )
+        self.fidelity = fidelity
         scene, task_config, controller_config, reward_config = load_env_config(task_cls, config)
         sections: dict[str, Any] = dict(FIDELITY_PRESETS[fidelity])
         if proxy is not None:

@@ -78,3 +78,38 @@ def test_unknown_names_are_refused() -> None:
 def test_pareto_front_keeps_only_unbeaten_points() -> None:
     points = [(1.0, 5.0), (2.0, 3.0), (3.0, 4.0), (4.0, 1.0), (0.5, 0.5), (5.0, math.nan)]
     assert pareto_front(points) == [4, 3]
+
+
+def test_auto_fidelity_picks_the_cheapest_preset_within_budget(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from graspenv import config
+
+    monkeypatch.setattr(config, "PRESET_DRIFT_MM", {"fast": 3.0, "default": 1.0, "reference": 0.0})
+    assert config.choose_fidelity(5.0) == "fast"
+    assert config.choose_fidelity(2.0) == "default"
+    assert config.choose_fidelity(0.5) == "reference"
+    with pytest.raises(ValueError, match="error_budget"):
+        config.choose_fidelity(-1.0)
+
+
+def test_shipped_preset_errors_are_measured() -> None:
+    from graspenv.config import FIDELITY_PRESETS, PRESET_DRIFT_MM
+
+    assert list(PRESET_DRIFT_MM) == list(FIDELITY_PRESETS)
+    assert all(math.isfinite(v) and v >= 0 for v in PRESET_DRIFT_MM.values())
+    assert PRESET_DRIFT_MM["reference"] == 0.0
+
+
+def test_env_takes_auto_fidelity_with_a_budget() -> None:
+    import gymnasium as gym
+
+    import graspenv  # noqa: F401
+
+    env = gym.make("graspenv/TurnInPlace-v0", fidelity="auto", error_budget=1e9)
+    try:
+        assert env.unwrapped.fidelity == "fast"  # type: ignore[attr-defined]
+    finally:
+        env.close()
+    with pytest.raises(ValueError, match="error_budget"):
+        gym.make("graspenv/TurnInPlace-v0", fidelity="auto")

@@ -140,12 +140,12 @@ def load_agent(spec: str, seed: int = 0) -> AgentSpec:
 
 def _load_learned(path: Path) -> AgentSpec:
     if path.is_dir():
-        for candidate in ("best_model.zip", "model.zip"):
+        for candidate in ("best_model.zip", "model.zip", "policy.pt"):
             if (path / candidate).is_file():
                 path = path / candidate
                 break
         else:
-            raise FileNotFoundError(f"no best_model.zip or model.zip in {path}")
+            raise FileNotFoundError(f"no best_model.zip, model.zip or policy.pt in {path}")
     if not path.is_file():
         raise FileNotFoundError(
             f"no model file {path} (agents are scripted:NAME, random, or a model path)"
@@ -157,12 +157,18 @@ def _load_learned(path: Path) -> AgentSpec:
     from agents.hyperparams import ALGOS, algorithm
 
     algos = [run["algo"]] if "algo" in run else list(ALGOS)
+    settings = run.get("hyperparams", {})
     model = None
     for algo in algos:
+        cls = algorithm(algo)
         try:
-            model = algorithm(algo).load(path, device="cpu")
+            if path.suffix == ".pt":  # a policy alone (see agents/policies/README.md)
+                policy_cls = cls.policy_aliases[settings.get("policy", "MlpPolicy")]
+                model = policy_cls.load(path, device="cpu")
+            else:
+                model = cls.load(path, device="cpu")
             break
-        except Exception:
+        except Exception:  # SB3 raises many kinds of error on a wrong file
             continue
     if model is None:
         raise ValueError(f"{path} is not a stable-baselines3 {' or '.join(algos).upper()} model")
@@ -171,7 +177,6 @@ def _load_learned(path: Path) -> AgentSpec:
         with (folder / "vecnormalize.pkl").open("rb") as f:
             normalizer = pickle.load(f)
         normalizer.training = False
-    settings = run.get("hyperparams", {})
     label = f"{run.get('algo', type(model).__name__.lower()).upper()} ({folder.name})"
     return AgentSpec(
         label,

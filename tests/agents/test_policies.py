@@ -1,0 +1,28 @@
+"""The learned baselines shipped in agents/policies load and play their task."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from agents.compare import POLICIES
+from agents.evaluate import evaluate, load_agent
+
+FOLDERS = sorted(p for p in POLICIES.iterdir() if (p / "run.json").is_file())
+
+
+def test_both_learned_baselines_are_shipped() -> None:
+    homes = {json.loads((p / "run.json").read_text())["env_id"] for p in FOLDERS}
+    assert {"graspenv/TurnInPlace-v0", "graspenv/SqueezeSlide-v0"} <= homes
+
+
+@pytest.mark.parametrize("folder", FOLDERS, ids=lambda p: p.name)
+def test_policy_is_small_and_plays_its_task(folder: Path) -> None:
+    assert (folder / "policy.pt").stat().st_size < 2_000_000
+    agent = load_agent(str(folder))
+    run = json.loads((folder / "run.json").read_text())
+    assert agent.home == run["env_id"] and agent.kind == run["algo"].upper()
+    result = evaluate(run["env_id"], agent, [5000])
+    assert len(result.episodes) == 1 and result.episodes[0].length >= 1

@@ -21,6 +21,11 @@ def _say(line: str) -> None:
     print(line, file=sys.stderr, flush=True)
 
 
+def _check_episodes(episodes: int) -> None:
+    if episodes < 1:
+        raise ValueError(f"--episodes must be at least 1, got {episodes}")
+
+
 def _train(args: argparse.Namespace) -> int:
     from agents.train import train
 
@@ -66,8 +71,7 @@ def _progress(label: str) -> Callable[[int, int], None]:
 def _eval(args: argparse.Namespace) -> int:
     from agents.evaluate import FIRST_SEED, evaluate, load_agent, summary_table
 
-    if args.episodes < 1:
-        raise ValueError(f"--episodes must be at least 1, got {args.episodes}")
+    _check_episodes(args.episodes)
     first = FIRST_SEED if args.seed is None else args.seed
     agent = load_agent(args.agent, first)
     env_id = args.env or agent.home
@@ -101,8 +105,7 @@ def add_eval(sub: argparse._SubParsersAction) -> None:
 def _compare(args: argparse.Namespace) -> int:
     from agents.compare import compare
 
-    if args.episodes < 1:
-        raise ValueError(f"--episodes must be at least 1, got {args.episodes}")
+    _check_episodes(args.episodes)
     result = compare(args.env, args.agent, args.episodes, args.seed, Path(args.out), progress=_say)
     print(result.table)
     for path in result.files:

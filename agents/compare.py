@@ -52,12 +52,10 @@ def plan(env_ids: Sequence[str] | None, specs: Sequence[str] | None) -> list[tup
     """The (environment, agent spec) pairs to run, checking every name first."""
     import graspenv
     from agents.evaluate import load_agent
+    from agents.train import check_env_id
 
     for env_id in env_ids or ():
-        if env_id not in graspenv.ENV_IDS:
-            raise ValueError(
-                f"unknown environment {env_id!r}; expected one of {list(graspenv.ENV_IDS)}"
-            )
+        check_env_id(env_id)
     explicit = bool(env_ids)
     envs = list(env_ids or graspenv.ENV_IDS)
     pairs = []
@@ -95,7 +93,8 @@ def compare(
             for i, future in enumerate(as_completed(futures)):
                 results[futures[future]] = future.result()
                 _report(progress, i + 1, len(pairs), results[futures[future]])
-    summaries = tuple(results[pair] for pair in sorted(pairs, key=lambda p: (p[0], pairs.index(p))))
+    # By environment, then in plan order (the sort is stable).
+    summaries = tuple(results[pair] for pair in sorted(pairs, key=lambda p: p[0]))
     return CompareResult(summaries, *write(summaries, out, episodes))
 
 

@@ -32,7 +32,7 @@ from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
 
 from agents.hyperparams import algorithm, algorithm_kwargs, load_hyperparams
 
-__all__ = ["TrainResult", "make_env", "make_vec_env", "train"]
+__all__ = ["TrainResult", "check_env_id", "make_env", "make_vec_env", "train"]
 
 PACKAGES = (
     "graspenv",
@@ -45,15 +45,21 @@ PACKAGES = (
 )
 
 
-def make_env(env_id: str, env_kwargs: dict[str, Any], wrapper: str) -> gym.Env[Any, Any]:
-    """One environment as training sees it (picklable for subprocess workers)."""
+def check_env_id(env_id: str) -> None:
+    """``ValueError`` naming the registered ids unless ``env_id`` is one of them."""
     import graspenv
-    from agents.wrappers import WRAPPERS
 
     if env_id not in graspenv.ENV_IDS:
         raise ValueError(
             f"unknown environment {env_id!r}; expected one of {list(graspenv.ENV_IDS)}"
         )
+
+
+def make_env(env_id: str, env_kwargs: dict[str, Any], wrapper: str) -> gym.Env[Any, Any]:
+    """One environment as training sees it (picklable for subprocess workers)."""
+    from agents.wrappers import WRAPPERS
+
+    check_env_id(env_id)
     env = gym.make(env_id, **env_kwargs)
     if wrapper:
         if wrapper not in WRAPPERS:
@@ -157,12 +163,7 @@ def train(
         steps, n_envs: override the file's ``n_timesteps`` and ``n_envs``.
         progress: receives a progress line now and then (default: stderr).
     """
-    import graspenv
-
-    if env_id not in graspenv.ENV_IDS:
-        raise ValueError(
-            f"unknown environment {env_id!r}; expected one of {list(graspenv.ENV_IDS)}"
-        )
+    check_env_id(env_id)
     settings = load_hyperparams(env_id, algo, config)
     if steps is not None:
         settings["n_timesteps"] = steps

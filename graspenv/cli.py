@@ -21,6 +21,11 @@ from graspenv.config import ConfigError
 __all__ = ["main"]
 
 
+def _say(line: str) -> None:
+    """A progress line, on stderr so that stdout keeps only the results."""
+    print(line, file=sys.stderr, flush=True)
+
+
 def _demo(args: argparse.Namespace) -> int:
     from graspenv.demo import run_demo
 
@@ -64,7 +69,7 @@ def _interactions(args: argparse.Namespace) -> int:
     def progress(label: str) -> None:
         nonlocal done
         done += 1
-        print(f"[{done}/{total}] {label}", file=sys.stderr, flush=True)
+        _say(f"[{done}/{total}] {label}")
 
     results = run_all(scenarios, args.method, args.config, progress, variants)
     table = markdown_table(results)
@@ -98,7 +103,7 @@ def _replay(args: argparse.Namespace) -> int:
     from graspenv.replay import DEFAULT_THRESHOLD, replay
 
     def progress(done: int, total: int | None) -> None:
-        print(f"[{done}/{total or '?'}] frames", file=sys.stderr, flush=True)
+        _say(f"[{done}/{total or '?'}] frames")
 
     result = replay(
         Path(args.source),
@@ -160,17 +165,13 @@ def _bench(args: argparse.Namespace) -> int:
     if args.soak is not None:
         from graspenv.bench.soak import soak
 
-        result = soak(args.soak, args.config, lambda line: print(line, file=sys.stderr))
+        result = soak(args.soak, args.config, _say)
         print(result.text())
         print(f"wrote {result.write(Path(args.out) / 'soak.csv')}")
         return 0 if result.flat and result.violations == 0 else 1
     settings = args.setting or (QUICK_SETTINGS if args.quick else list(SETTINGS))
     scenarios = args.scenario or (QUICK_SCENARIOS if args.quick else list(SCENARIOS))
-
-    def progress(line: str) -> None:
-        print(line, file=sys.stderr, flush=True)
-
-    results = run_bench(settings, scenarios, args.config, progress)
+    results = run_bench(settings, scenarios, args.config, _say)
     print(markdown_table(results))
     for path in write_outputs(results, Path(args.out)):
         print(f"wrote {path}")

@@ -42,14 +42,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.config import FIDELITY_PRESETS, ObjectConfig, SceneConfig, load_config, to_dict
-from graspenv.geometry import yaw_of
+from graspenv.bench.interactions import BOX, CLEARANCE, FINGER_RADIUS, pinch, with_objects
+from graspenv.config import FIDELITY_PRESETS, ObjectConfig, SceneConfig, load_config
+from graspenv.geometry import tilt_angle, yaw_of
 from graspenv.simulation import Simulation
 from graspenv.surface.hand import Hand
 from graspenv.surface.noise import SensorNoise
 from graspenv.surface.render import render_mask
 from graspenv.surface.scripts import FingerMotion, Phase, Script, side_strike
 from graspenv.surface.shapes import Fingertip
+from graspenv.tasks.metrics import coulomb_slip_force
 
 __all__ = [
     "QUICK_SETTINGS",
@@ -60,10 +62,7 @@ __all__ = [
     "run_bench",
 ]
 
-FINGER_RADIUS = 0.008
-CLEARANCE = 0.004
-DEPTH = 0.003
-BOX = ObjectConfig(name="box", shape="box", size=(0.06, 0.06, 0.03), mass=0.2)
+DEPTH = 0.003  # how far each fingertip is pressed into a gripped box, metres
 SLIP_RATE = 6.0  # newtons per second
 SLIP_FRAMES = 900  # the ramp gives up at SLIP_RATE × 15 s = 90 N (the figure is then NaN)
 SLIP_DISTANCE = 0.0005  # metres the box moves relative to the gripping particles
@@ -96,12 +95,11 @@ def _nearest_shape(hand: Hand, points: NDArray[np.float64]) -> list[str]:
     return [names[i] for i in distance.argmin(axis=0)]
 
 
-def _tracking_errors(
-    hand: Hand,
-    dt: float,
-    before: dict[int, NDArray[np.float64]],
-    after: dict[int, NDArray[np.float64]],
-) -> list[float]:
+#: Particle id → its contour point, metres, world frame, (2,).
+Points = dict[int, NDArray[np.float64]]
+
+
+def _tracking_errors(hand: Hand, dt: float, before: Points, after: Points) -> list[float]:
     """Squared errors (m²) of continuing particles against the true finger motion."""
     common = sorted(set(before) & set(after))
     if not common:
@@ -146,7 +144,7 @@ def play(
         dt = sim.surface.dt
         hands: list[Hand | None] = [hand for _, hand in script.frames(sim.surface)]
         empty = np.zeros(sim.surface.shape, np.uint8)
-        previous: dict[int, NDArray[np.float64]] = {}
+        previous: Points = {}
         for index, hand in enumerate(hands + [None] * extra_frames):
             mask = empty if hand is None else render_mask(hand, sim.surface)
             if noise is not None and hand is not None:
@@ -155,12 +153,11 @@ def play(
             result.frames += 1
             result.add_timings(report.timings)
             result.particles.append(report.n_particles)
-            command = report.command
-            now = (
-                {int(p): command.targets[k] for k, p in enumerate(command.particles[:, 0])}
-                if command.particles.size
-                else {}
-            )
+            # Each continuing particle's contour point, in tracked frames only.
+            now: Points = {}
+            if index in tracked and report.command.particles.size:
+                command = report.command
+                now = {int(p): command.targets[k] for k, p in enumerate(command.particles[:, 0])}
             if index - 1 in tracked and index in tracked:
                 before_hand = hands[index - 1]
                 assert before_hand is not None
@@ -177,31 +174,9 @@ def play(
 # -- scenarios ---------------------------------------------------------------------------
 
 
-def tilt_of(q: NDArray[np.float64]) -> float:
-    """Angle between a body's z axis and the world's, radians."""
-    x, y = float(q[0]), float(q[1])
-    return math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (x * x + y * y))))
-
-
-def _with(base: SceneConfig, *objects: ObjectConfig) -> SceneConfig:
-    return base.replace(objects=[to_dict(o) for o in objects])
-
-
-def _pinch(obj: ObjectConfig, depth: float = DEPTH, **kwargs: Any) -> Script:
-    from graspenv.surface.scripts import two_finger_pinch
-
-    return two_finger_pinch(
-        centre=obj.position,
-        gap=obj.size[0] + 2 * CLEARANCE,
-        finger_radius=FINGER_RADIUS,
-        approach=CLEARANCE + depth,
-        **kwargs,
-    )
-
-
 def turn(base: SceneConfig, noise: SensorNoise | None = None) -> Played:
-    script = _pinch(BOX, turn=math.pi / 2, turn_frames=90, slide_frames=0, hold_frames=15)
-    played = play(_with(base, BOX), script, ["box"], ("turn", "hold"), noise)
+    script = pinch(BOX, DEPTH, turn=math.pi / 2, turn_frames=90, slide_frames=0, hold_frames=15)
+    played = play(with_objects(base, BOX), script, ["box"], ("turn", "hold"), noise)
     x, y, _, yaw = played.final["box"]
     played.errors["yaw_error_deg"] = math.degrees(math.remainder(yaw - math.pi / 2, 2 * math.pi))
     played.errors["drift_mm"] = 1000 * math.hypot(x, y)
@@ -209,8 +184,8 @@ def turn(base: SceneConfig, noise: SensorNoise | None = None) -> Played:
 
 
 def slide(base: SceneConfig) -> Played:
-    script = _pinch(BOX, slide=(0.0, 0.10), turn_frames=0, slide_frames=90, hold_frames=15)
-    played = play(_with(base, BOX), script, ["box"], ("slide", "hold"))
+    script = pinch(BOX, DEPTH, slide=(0.0, 0.10), turn_frames=0, slide_frames=90, hold_frames=15)
+    played = play(with_objects(base, BOX), script, ["box"], ("slide", "hold"))
     x, y, _, yaw = played.final["box"]
     played.errors["travel_error_mm"] = 1000 * math.hypot(x, y - 0.10)
     played.errors["yaw_drift_deg"] = math.degrees(yaw)
@@ -227,10 +202,8 @@ def slip(base: SceneConfig) -> Played:
     with a growing force until it slips: moves :data:`SLIP_DISTANCE` relative to the
     particles gripping it (they give elastically with the box before it slips)."""
     settle = 20
-    script = _pinch(
-        FLAT_BOX, turn_frames=0, slide_frames=0, hold_frames=settle + SLIP_FRAMES, depth=0.001
-    )
-    scene = _with(base, FLAT_BOX)
+    script = pinch(FLAT_BOX, 0.001, turn_frames=0, slide_frames=0, hold_frames=settle + SLIP_FRAMES)
+    scene = with_objects(base, FLAT_BOX)
     hold_start = sum(
         len(frames) for name, frames in script.phase_ranges() if name in ("touch", "squeeze")
     )
@@ -258,7 +231,7 @@ def slip(base: SceneConfig) -> Played:
             relative = (position[:2] - state["start"]) - (grip - state["grip_start"])
             if np.linalg.norm(relative) > SLIP_DISTANCE:
                 state["force"] = force
-                state["tilt"] = math.degrees(tilt_of(sim.object_pose("box")[1]))
+                state["tilt"] = math.degrees(tilt_angle(sim.object_pose("box")[1]))
                 return True
             sim.apply_force("box", (0.0, SLIP_RATE * (index + 2 - ramp_start) * dt, 0.0))
         return False
@@ -270,7 +243,8 @@ def slip(base: SceneConfig) -> Played:
     # Mean normal forces (newtons, from the last sub-step of each frame) over the hold.
     normal = float(np.mean(state["normal"]))
     table = float(np.mean(state["table"]))
-    predicted = finger_mu * normal + table_mu * table
+    # Each finger presses with about half the total normal force.
+    predicted = coulomb_slip_force(normal / 2, finger_mu) + table_mu * table
     played.errors["grip_normal_n"] = normal
     played.errors["tilt_at_slip_deg"] = state.get("tilt", math.nan)
     played.errors["slip_force_n"] = state["force"]
@@ -283,7 +257,7 @@ def flick(base: SceneConfig) -> Played:
     script = side_strike(
         (-0.03, 0.0), 0.0, FINGER_RADIUS, clearance=0.01, depth=0.01, strike_frames=5
     )
-    return play(_with(base, BOX), script, ["box"], ("strike",), extra_frames=40)
+    return play(with_objects(base, BOX), script, ["box"], ("strike",), extra_frames=40)
 
 
 def _five_finger_hand(hand: Hand, prefix: str, centre: tuple[float, float], half: float) -> None:
@@ -331,7 +305,7 @@ def two_hands(base: SceneConfig) -> Played:
             Phase(15, {n: FingerMotion(touching=True) for n in names}, name="hold"),
         ],
     )
-    played = play(_with(base, left, right), script, ["left", "right"], ("carry", "hold"))
+    played = play(with_objects(base, left, right), script, ["left", "right"], ("carry", "hold"))
     errors = [
         math.hypot(played.final["left"][0] + 0.1, played.final["left"][1] - 0.08),
         math.hypot(played.final["right"][0] - 0.1, played.final["right"][1] + 0.08),
@@ -432,14 +406,6 @@ class Result:
         return row
 
 
-def scene_for(base: SceneConfig, overrides: dict[str, dict[str, Any]]) -> SceneConfig:
-    """The base scene with whole-section overrides merged key by key."""
-    sections = {
-        name: {**to_dict(getattr(base, name)), **values} for name, values in overrides.items()
-    }
-    return base.replace(**sections)
-
-
 def measure(
     setting: str, scenario: str, scene: SceneConfig, reference: Played | None
 ) -> tuple[Result, Played]:
@@ -495,7 +461,7 @@ def run_bench(
     total = len(order) * len(scenarios)
     done = 0
     for setting in order:
-        scene = scene_for(base, SETTINGS[setting])
+        scene = base.replace(**SETTINGS[setting])
         for scenario in scenarios:
             done += 1
             if progress is not None:

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
-from graspenv.geometry import yaw_of
+from graspenv.geometry import tilt_angle, yaw_of
 from graspenv.simulation import Simulation
 from graspenv.surface.hand import Hand
 from graspenv.surface.render import render_mask
@@ -40,6 +40,7 @@ __all__ = [
     "pinch",
     "play",
     "run_all",
+    "with_objects",
 ]
 
 FINGER_RADIUS = 0.008
@@ -102,9 +103,7 @@ def play(sim: Simulation, script: Script, name: str, extra_frames: int = 0) -> T
         now = yaw_of(q)
         yaw += math.remainder(now - previous, 2 * math.pi)
         previous = now
-        x, y = q[0], q[1]
-        # The z component of the body's z axis is 1 - 2(x² + y²).
-        tilts.append(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (x * x + y * y)))))
+        tilts.append(tilt_angle(q))
         positions.append(position)
         yaws.append(yaw)
         if hand is not None:
@@ -123,7 +122,8 @@ def play(sim: Simulation, script: Script, name: str, extra_frames: int = 0) -> T
 # -- helpers -----------------------------------------------------------------------
 
 
-def _with_objects(base: SceneConfig, *objects: ObjectConfig, **sections: Any) -> SceneConfig:
+def with_objects(base: SceneConfig, *objects: ObjectConfig, **sections: Any) -> SceneConfig:
+    """The base scene with exactly these objects (and any section overrides)."""
     return base.replace(objects=[to_dict(o) for o in objects], **sections)
 
 
@@ -164,7 +164,7 @@ def _run(scene: SceneConfig, script: Script, name: str, extra_frames: int = 0) -
 def turn_in_place(base: SceneConfig, depth: float = 0.003) -> dict[str, float]:
     """Grasp a box from two sides and turn the pair 90° in place (paper test 3)."""
     script = pinch(BOX, depth, turn=math.pi / 2, turn_frames=90, slide_frames=0, hold_frames=15)
-    trace = _run(_with_objects(base, BOX), script, BOX.name)
+    trace = _run(with_objects(base, BOX), script, BOX.name)
     end = trace.at_end_of("hold")
     first, last = trace.hands[trace.phases["touch"][0]], trace.hands[end]
     finger_turn = _angle_between(_pair_axis(first), _pair_axis(last))
@@ -179,7 +179,7 @@ def turn_in_place(base: SceneConfig, depth: float = 0.003) -> dict[str, float]:
 def slide(base: SceneConfig, depth: float = 0.003) -> dict[str, float]:
     """Grasp a box from two sides and slide the pair 10 cm across the grip (test 4)."""
     script = pinch(BOX, depth, slide=(0.0, 0.10), turn_frames=0, slide_frames=90, hold_frames=15)
-    trace = _run(_with_objects(base, BOX), script, BOX.name)
+    trace = _run(with_objects(base, BOX), script, BOX.name)
     end = trace.at_end_of("hold")
     first, last = trace.hands[trace.phases["touch"][0]], trace.hands[end]
     finger_travel = float(np.linalg.norm(_pair_middle(last) - _pair_middle(first)))
@@ -195,7 +195,7 @@ def slide(base: SceneConfig, depth: float = 0.003) -> dict[str, float]:
 def side_strike_push(base: SceneConfig) -> dict[str, float]:
     """A finger strikes the box's left side moving +x, 2 cm past the face (test 1)."""
     script = side_strike((-0.03, 0.0), 0.0, FINGER_RADIUS, clearance=0.01, depth=0.02)
-    trace = _run(_with_objects(base, BOX), script, BOX.name, extra_frames=30)
+    trace = _run(with_objects(base, BOX), script, BOX.name, extra_frames=30)
     dx, dy = trace.travel()
     return {"along_mm": 1000 * float(dx), "across_mm": 1000 * abs(float(dy))}
 
@@ -206,7 +206,7 @@ FLAT = ObjectConfig(name="card", shape="box", size=(0.08, 0.08, 0.01), mass=0.02
 def top_rub_light(base: SceneConfig) -> dict[str, float]:
     """A finger rubs across the top of a light flat box, off its centre (test 2)."""
     script = top_rub((0.0, 0.015), (0.03, 0.0), FINGER_RADIUS, press=0.5, rub_frames=40)
-    trace = _run(_with_objects(base, FLAT), script, FLAT.name, extra_frames=10)
+    trace = _run(with_objects(base, FLAT), script, FLAT.name, extra_frames=10)
     along = trace.travel()[0]
     return {"along_mm": 1000 * float(along), "turn_deg": math.degrees(trace.turn())}
 
@@ -215,7 +215,7 @@ def top_rub_heavy(base: SceneConfig) -> dict[str, float]:
     """The same rub on a 1 kg box, carried on off its edge (test 2)."""
     heavy = ObjectConfig(name="card", shape="box", size=(0.08, 0.08, 0.01), mass=1.0)
     script = top_rub((0.0, 0.015), (0.06, 0.0), FINGER_RADIUS, press=0.5, rub_frames=60)
-    trace = _run(_with_objects(base, heavy), script, heavy.name, extra_frames=10)
+    trace = _run(with_objects(base, heavy), script, heavy.name, extra_frames=10)
     moved = np.linalg.norm(trace.position[:, :2] - trace.start[:2], axis=1)
     return {"moved_mm": 1000 * float(moved.max())}
 
@@ -230,7 +230,7 @@ def third_finger(base: SceneConfig, depth: float) -> dict[str, float]:
         finger_radius=FINGER_RADIUS,
         approach=CLEARANCE + depth,
     )
-    trace = _run(_with_objects(base, BOX), script, BOX.name)
+    trace = _run(with_objects(base, BOX), script, BOX.name)
     before = trace.phases["push"][0] - 1
     after = trace.at_end_of("hold")
     moved = trace.position[after, :2] - trace.position[before, :2]
@@ -251,7 +251,7 @@ def release_push(base: SceneConfig) -> dict[str, float]:
         approach=CLEARANCE + 0.0025,
         stagger_frames=15,
     )
-    trace = _run(_with_objects(base, BOX), script, BOX.name, extra_frames=20)
+    trace = _run(with_objects(base, BOX), script, BOX.name, extra_frames=20)
     before = trace.at_end_of("hold")
     return {"outward_mm": 1000 * float(trace.position[-1, 0] - trace.position[before, 0])}
 
@@ -261,7 +261,7 @@ BALL = ObjectConfig(name="ball", shape="sphere", size=(0.02,), mass=0.05, rollin
 
 def ball_carry(base: SceneConfig, layers: int = 3) -> dict[str, float]:
     """Squeeze a ball and carry it 90° round a pivot 5 cm away (test 7)."""
-    scene = _with_objects(base, BALL, proxy={"stack_layers": layers})
+    scene = with_objects(base, BALL, proxy={"stack_layers": layers})
     grip = pinch(BALL, 0.003, turn_frames=0, slide_frames=0, lift_frames=0)
     pivot = (BALL.position[0], BALL.position[1] - 0.05)
     carry = Phase(

@@ -20,7 +20,8 @@ from pathlib import Path
 
 import numpy as np
 
-from graspenv.bench.frontier import BOX, _pinch, _with
+from graspenv.bench.frontier import DEPTH
+from graspenv.bench.interactions import BOX, pinch, with_objects
 from graspenv.bench.invariants import InvariantChecker, hand_speed
 from graspenv.config import SceneConfig, load_config
 from graspenv.simulation import Simulation
@@ -84,8 +85,8 @@ def soak(
     """Run the grasp cycle for ``frames`` camera frames (see the module docstring)."""
     if frames < 1:
         raise ValueError(f"soak needs at least one frame, got {frames}")
-    scene = _with(load_config(config), BOX)
-    cycle = _pinch(BOX, turn=math.pi / 2, turn_frames=60, slide_frames=0, hold_frames=5)
+    scene = with_objects(load_config(config), BOX)
+    cycle = pinch(BOX, DEPTH, turn=math.pi / 2, turn_frames=60, slide_frames=0, hold_frames=5)
     back = Phase(60, group=GroupMotion(("thumb", "index"), rotation=-math.pi / 2), name="back")
     phases = list(cycle.phases)
     cycle = type(cycle)(cycle.hand, [*phases[:-1], back, phases[-1]])

@@ -46,12 +46,13 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from graspenv.geometry import tilt_angle
 
 __all__ = [
     "ContactArrays",
@@ -541,23 +542,6 @@ def planar_slip(
     fingers = np.asarray(finger_velocities, dtype=float)
     fit = rigid_velocity_at(points[:, :2], fingers[:, :2], centre)
     return float(np.linalg.norm(velocity - fit))
-
-
-def tilt_angle(quaternion: Sequence[float] | NDArray[np.float64]) -> float:
-    """Angle between a body's z axis and the world's z axis.
-
-    Args:
-        quaternion: orientation (x, y, z, w), normalised here, shape (4,).
-
-    Returns:
-        Radians in [0, π]; yaw alone gives 0.
-    """
-    x, y, z, w = np.asarray(quaternion, dtype=float) / np.linalg.norm(quaternion)
-    # Third column of the rotation matrix: the body's z axis in the world frame.
-    axis_x = 2.0 * (x * z + w * y)
-    axis_y = 2.0 * (y * z - w * x)
-    axis_z = 1.0 - 2.0 * (x * x + y * y)
-    return math.atan2(math.hypot(axis_x, axis_y), axis_z)
 
 
 def coulomb_slip_force(grip_force: float, mu: float) -> float:

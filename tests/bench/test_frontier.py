@@ -16,7 +16,6 @@ from graspenv.bench.frontier import (
     SCENARIOS,
     SETTINGS,
     run_bench,
-    scene_for,
     slip,
     turn,
     write_outputs,
@@ -40,7 +39,7 @@ def test_slip_force_matches_coulomb(base: SceneConfig) -> None:
 
 def test_weaker_friction_slips_sooner(base: SceneConfig) -> None:
     """Half the particle friction: the grip gives way at a smaller force."""
-    low = scene_for(base, {"proxy": {"particle_friction": 1.0}})
+    low = base.replace(proxy={"particle_friction": 1.0})
     assert slip(low).errors["slip_force_n"] < 0.75 * slip(base).errors["slip_force_n"]
 
 

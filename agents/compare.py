@@ -11,6 +11,7 @@ with ``--env``), ``random`` on every one. Jobs run in parallel, one per core.
 from __future__ import annotations
 
 import csv
+import multiprocessing
 import os
 from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -88,7 +89,9 @@ def compare(
             results[env_id, spec] = _job(env_id, spec, seeds)
             _report(progress, i + 1, len(pairs), results[env_id, spec])
     else:
-        with ProcessPoolExecutor(workers) as pool:
+        # Spawned, not forked: a worker forked after torch has started its threads
+        # (loading a learned policy while planning does) can hang forever.
+        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
             futures = {pool.submit(_job, e, s, seeds): (e, s) for e, s in pairs}
             for i, future in enumerate(as_completed(futures)):
                 results[futures[future]] = future.result()

@@ -26,3 +26,12 @@ def test_policy_is_small_and_plays_its_task(folder: Path) -> None:
     assert agent.home == run["env_id"] and agent.kind == run["algo"].upper()
     result = evaluate(run["env_id"], agent, [5000])
     assert len(result.episodes) == 1 and result.episodes[0].length >= 1
+
+
+def test_compare_runs_the_learned_policies_in_parallel(tmp_path: Path) -> None:
+    """Loading a policy imports torch before the worker pool starts: forked workers
+    hung here; the pool now spawns them."""
+    from agents.compare import compare
+
+    result = compare(None, [str(p) for p in FOLDERS], 1, 1000, tmp_path, workers=2)
+    assert {s["agent"] for s in result.summaries} == {f"SAC ({p.name})" for p in FOLDERS}

@@ -171,7 +171,8 @@ def _bench(args: argparse.Namespace) -> int:
         return 0 if result.flat and result.violations == 0 else 1
     settings = args.setting or (QUICK_SETTINGS if args.quick else list(SETTINGS))
     scenarios = args.scenario or (QUICK_SCENARIOS if args.quick else list(SCENARIOS))
-    results = run_bench(settings, scenarios, args.config, _say)
+    placements = args.placements or (1 if args.quick else 3)
+    results = run_bench(settings, scenarios, args.config, _say, placements)
     print(markdown_table(results))
     for path in write_outputs(results, Path(args.out)):
         print(f"wrote {path}")
@@ -186,6 +187,12 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--quick", action="store_true", help="a subset that runs in under 2 minutes")
     p.add_argument("--setting", action="append", help="one setting (repeatable); default all")
     p.add_argument("--scenario", action="append", help="one scenario (repeatable); default all")
+    p.add_argument(
+        "--placements",
+        type=int,
+        default=None,
+        help="sub-pixel placements of each scene, errors averaged (default 3; --quick 1)",
+    )
     p.add_argument("--config", default=None, help="base scene file (default: built-in)")
     p.add_argument("--out", default="runs/bench", help="folder for bench.csv, bench.md, pareto.png")
     p.add_argument(

@@ -174,6 +174,14 @@ class ProxyConfig:
         penetration_margin: how deep inside a footprint, metres, a contour point must
             be for the penetration limit to put its particle on the top face. Keep it
             about 1 mm above the deepest squeeze that should hold an object.
+        cull: give a physics body only to contour points that could touch an object
+            soon; the others stay plain contour points, still matched from frame to
+            frame, and get a body as they come near (model only what a scene needs).
+        cull_margin: safety distance of culling, metres. A point gets a body once it
+            is nearer an object's footprint than the particle radius plus twice its
+            contact's travel in the last frame plus the fastest object's travel in a
+            frame plus this margin, and loses it beyond that reach plus this margin
+            again (so a point near the boundary does not flicker).
         track_hand_rotation: estimate one rigid rotation of the hand from all its
             contacts' centroids and apply it to previous points before matching.
         predicted_resampling: resample a continuing contour starting from the
@@ -194,6 +202,8 @@ class ProxyConfig:
     down_force: float = 0.05
     penetration_limit: bool = True
     penetration_margin: float = 0.005
+    cull: bool = True
+    cull_margin: float = 0.004
     rigid_height: float = 0.01
     track_hand_rotation: bool = True
     predicted_resampling: bool = True
@@ -210,6 +220,8 @@ class ProxyConfig:
                 raise ConfigError(f"proxy.{key} must be >= 0, got {getattr(self, key)}")
         if self.particle_friction < 0 or self.down_force < 0 or self.stack_spacing < 0:
             raise ConfigError("proxy.particle_friction, down_force, stack_spacing must be >= 0")
+        if self.cull_margin < 0:
+            raise ConfigError(f"proxy.cull_margin must be >= 0, got {self.cull_margin}")
         if self.penetration_margin < 0:
             raise ConfigError(
                 f"proxy.penetration_margin must be >= 0, got {self.penetration_margin}"

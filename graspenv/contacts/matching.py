@@ -19,29 +19,42 @@ distance between the (2h+1)-point windows seen as vectors, so the whole N × M t
 a matrix product, computed in row blocks small enough that BLAS keeps to one thread
 and memory stays bounded.
 
-**Fast** (:func:`match_fast`): one global cyclic alignment of the two contours by FFT
-cross-correlation (Q resampled to N points for this estimate only; translation-free,
-since a common shift cannot change which cyclic offset fits best), then each point's
-own argmin within ±S indices of its aligned index. The exhaustive cost is not
+**Fast** (:func:`match_fast`): one global cyclic alignment of the two contours, the
+peak of their cross-correlation (Q resampled to N points for this estimate only;
+translation-free, since a common shift cannot change which cyclic offset fits best),
+then each point's own argmin within ±S indices of its aligned index. The peak is found
+by FFT, unless the correlation computed directly at the shifts -8 .. 8 already peaks
+strictly inside them, where the centred contours' cosine similarity is at least 0.98:
+the persistent proxy's case, as it resamples the current contour from the predicted
+first point. The correlation of two outlines of one contact has a single peak
+(measured: no other local maximum in any pair of the sample below), so such a peak is
+the FFT's; the cosine bound keeps other shapes on the FFT. The exhaustive cost is not
 translation-free: where the finger's motion runs along the contour, the best window
 lies about (t·tangent)/spacing indices behind the globally aligned one (t the centroid
 displacement), so the aligned index includes that per-point term and S only has to
-absorb the shape's deformation. Window sums come from cumulative sums along each
-diagonal j − k of the cost table: O(N · (S + |N − M| + |t|/spacing)) rather than
-O(N · M · n). A point whose minimum lands on the edge of its range searches again
-around that minimum until it lies inside, which follows the cost downhill past S.
+absorb the shape's deformation. Window sums run along each diagonal j − k of a table
+of squared distances, built for blocks of points that span only the diagonals their
+own points need: O(N · (S + |N − M| + |t|/spacing)) rather than O(N · M · n). A point
+whose minimum lands on the edge of its range searches again around that minimum until
+it lies inside, which follows the cost downhill past S.
 
-**Measured** (window 4, S = 3; ``python -m tests.contacts.measure_matching``). Fast
-and exhaustive successors agree on 99.95 % of 40 001 fingertip points (6-12 mm
-ellipses rendered at the table's pixels, one 60 Hz frame at up to 0.5 m/s and
-±3 rad/s, 2-4 mm spacing, arbitrary start points) and on 100 % of 20 480 points of
-512-point hand outlines. All disagreements come at 0.39-0.5 m/s and none is a tie:
-the exhaustive successor lies across the fingertip, on contour running the other way,
-because a 7-8 mm step brings the new trailing side nearer the old leading side than
-the new leading side is. Time with one BLAS thread: at 512 points fast 0.24 ms,
-exhaustive 0.55 ms (2.3×; 4.4× at 1 024); below about 256 points the exhaustive
-search is the cheaper, as the fast path's fixed cost of a few dozen numpy calls
-(about 0.12 ms here) outweighs the N × M product. Hence ``correspond(method="auto")``.
+**Measured** (window 4, S = 3; ``OPENBLAS_NUM_THREADS=1 python -m
+tests.contacts.measure_matching``, figures from several runs). Fast and exhaustive
+successors agree on 99.95 % of 40 001 fingertip points (6-12 mm ellipses rendered at
+the table's pixels, one 60 Hz frame at up to 0.5 m/s and ±3 rad/s, 2-4 mm spacing,
+arbitrary start points) and on 100 % of 20 480 points of 512-point hand outlines. All
+disagreements come at 0.39-0.5 m/s and none is a tie: the exhaustive successor lies
+across the fingertip, on contour running the other way, because a 7-8 mm step brings
+the new trailing side nearer the old leading side than the new leading side is. The
+same hand outlines resampled from the predicted start (no FFT) agree on 100 % too.
+Time with one BLAS thread (best of interleaved runs on a shared two-core machine,
+whose figures vary by a third from run to run): at 512 points fast 0.12-0.15 ms,
+exhaustive 0.56 ms (4-5×; 3-3.8× from arbitrary start points, which need the FFT);
+8-9.5× at 1 024 points, 14-20× at 2 048. The fast path is a fixed sequence of about 45
+numpy calls of one to a few microseconds each, most of its time up to 512 points:
+below about 128 points the exhaustive search is the cheaper, at 256 it takes twice the
+fast one's time (``correspond(method="auto")`` searches exhaustively up to 256 × 256
+point pairs).
 
 **Particles** (:func:`correspond`): DESIGN's rule made one-to-one. The predecessor of
 current point j is, among the previous points whose successor is j, the one with the
@@ -85,7 +98,13 @@ ComplexArray = NDArray[np.complex128]
 _SINGLE_THREAD_MACS = 1 << 18
 # correspond(method="auto") searches exhaustively up to this many point pairs.
 _AUTO_EXHAUSTIVE = 256 * 256
-_NO_INDEX = np.iinfo(np.intp).max  # sorts after every real index
+# The fast matcher computes the correlation at shifts up to this far from 0 directly
+# and skips the FFT when it peaks inside them, where the centred contours' cosine
+# similarity reaches _ALIGNED_COSINE (module docstring).
+_NEAR_SHIFTS = 8
+_ALIGNED_COSINE = 0.98
+# Most table entries (points × diagonals) the fast matcher builds at once.
+_TABLE_SIZE = 1 << 14
 
 
 def _contour(points: ArrayLike, name: str) -> FloatArray:
@@ -171,70 +190,130 @@ def window_costs(
 
 
 def _complex(points: FloatArray) -> ComplexArray:
-    """Points (N, 2) as x + iy: the fast matcher's arithmetic is then a few flat passes."""
-    return points[:, 0] + 1j * points[:, 1]
+    """Points (N, 2) as x + iy, a view when they are contiguous: the fast matcher's
+    arithmetic is then a few flat passes."""
+    return np.ascontiguousarray(points).view(np.complex128)[:, 0]
 
 
 @dataclass(frozen=True, eq=False)
 class _Plan:
     """Index arrays of the fast matcher that depend only on the sizes (cached)."""
 
-    k: IntArray  # 0..N-1
-    drift: FloatArray  # k·M/N - k: where the diagonal j - k sits at a pure rescale
-    lower: IntArray  # Q index below k·M/N (Q resampled to N points)
+    pad: int  # max(h, 1): the tangent needs a neighbour each side even when h = 0
+    walk: IntArray  # P indices k - pad .. N - 1 + pad, circular
+    # Q resampled to N points, continued circularly _NEAR_SHIFTS points beyond each
+    # end: for k = -_NEAR_SHIFTS .. N - 1 + _NEAR_SHIFTS (mod N), the Q indices below
+    # and above k·M/N and the fraction between them.
+    lower: IntArray
     upper: IntArray
     weight: FloatArray
-    after: IntArray  # k + 1 and k - 1, circular
-    before: IntArray
-    walk: IntArray  # P indices k - h .. N - 1 + h, circular
-    reach: IntArray  # the same, unwrapped
+    drift: FloatArray  # k·M/N - k: where the diagonal j - k sits at a pure rescale
+    first: IntArray  # k - S: each point's first candidate j, less its aligned diagonal
+    rows: IntArray  # 0 .. N - 1
+    edge: NDArray[np.bool_]  # by column 0 .. 2S: on the edge of the search?
 
 
 @functools.lru_cache(maxsize=128)
-def _plan(n: int, m: int, half: int) -> _Plan:
+def _plan(n: int, m: int, half: int, search: int) -> _Plan:
     k = np.arange(n)
+    pad = max(half, 1)
     position = np.multiply(k, m / n, dtype=np.float64)
     lower = position.astype(np.intp)
-    reach = np.arange(-half, n + half)
+    ring = np.arange(-_NEAR_SHIFTS, n + _NEAR_SHIFTS) % n
     plan = _Plan(
-        k=k,
+        pad=pad,
+        walk=np.arange(-pad, n + pad) % n,
+        lower=lower[ring],
+        upper=((lower + 1) % m)[ring],
+        weight=np.subtract(position, lower, dtype=np.float64)[ring],
         drift=np.subtract(position, k, dtype=np.float64),
-        lower=lower,
-        upper=(lower + 1) % m,
-        weight=np.subtract(position, lower, dtype=np.float64),
-        after=(k + 1) % n,
-        before=(k - 1) % n,
-        walk=reach % n,
-        reach=reach,
+        first=k - search,
+        rows=k,
+        edge=np.arange(2 * search + 1) % max(2 * search, 1) == 0,
     )
     for array in vars(plan).values():
-        array.setflags(write=False)
+        if isinstance(array, np.ndarray):
+            array.setflags(write=False)
     return plan
 
 
-def _aligned_diagonal(p: ComplexArray, q: ComplexArray, plan: _Plan) -> IntArray:
-    """j - k (unwrapped) at which the fast search for each point k of P is centred.
+def _global_shift(p: ComplexArray, q_ring: ComplexArray) -> tuple[float, complex]:
+    """The cyclic shift of Q that best fits P, and the centroid's travel from P to Q.
 
-    One global cyclic shift from the FFT cross-correlation, plus each point's lag
-    along the contour from the centroid's travel (module docstring).
+    Args:
+        p: P, shape (N,), x + iy.
+        q_ring: Q resampled to N points, continued circularly for _NEAR_SHIFTS
+            points beyond each end: shape (N + 2·_NEAR_SHIFTS,), x + iy.
+
+    Returns:
+        (shift, travel): the shift in P's indices, fractional, in [-0.5, N); the
+        travel in the points' unit, x + iy.
     """
-    n, m = len(p), len(q)
-    # Q resampled to N points by index, which is by arc length for an even contour.
-    q_n = q if n == m else q[plan.lower] + plan.weight * (q[plan.upper] - q[plan.lower])
-    spectrum_p, spectrum_q = np.fft.fft(np.stack([p, q_n]), axis=1)
+    n = len(p)
+    q_n = q_ring[_NEAR_SHIFTS : _NEAR_SHIFTS + n]
+    total_p, total_q = complex(np.add.reduce(p)), complex(np.add.reduce(q_n))
+    if n > 2 * _NEAR_SHIFTS:
+        # The correlation at the shifts near 0, computed directly and uncentred
+        # (centring takes the same amount off each): when it peaks inside them and the
+        # contours fit well there, that peak is the FFT's (module docstring).
+        near = np.correlate(q_ring, p, "valid").real
+        best = int(near.argmax())
+        if best < _NEAR_SHIFTS:  # a tie goes to the smallest shift mod N, as below
+            other = _NEAR_SHIFTS + int(near[_NEAR_SHIFTS:].argmax())
+            if near[other] == near[best]:
+                best = other
+        if 0 < best < 2 * _NEAR_SHIFTS:
+            left, mid, right = near[best - 1 : best + 2].tolist()
+            centred = mid - (total_p.conjugate() * total_q).real / n
+            spread_p = np.vdot(p, p).real - abs(total_p) ** 2 / n
+            spread_q = np.vdot(q_n, q_n).real - abs(total_q) ** 2 / n
+            if centred > 0.0 and centred**2 >= _ALIGNED_COSINE**2 * spread_p * spread_q:
+                shift = _peak(float((best - _NEAR_SHIFTS) % n), left, mid, right)
+                return shift, (total_q - total_p) / n
+    pair = np.empty((2, n), dtype=np.complex128)
+    pair[0] = p
+    pair[1] = q_n
+    spectrum_p, spectrum_q = np.fft.fft(pair, axis=1)
     cross = np.conj(spectrum_p) * spectrum_q
     cross[0] = 0.0  # centres both contours: their position must not weigh on the shape
     # corr[d] = Σ_k Re(conj(p̃_k) q̃_{k+d}) = Σ_k P̃[k]·Q̃'[k+d]
     corr = np.fft.ifft(cross).real
-    best = int(np.argmax(corr))
+    best = int(corr.argmax())
     shift = float(best)
     if n >= 3:
-        left, mid, right = float(corr[best - 1]), float(corr[best]), float(corr[(best + 1) % n])
-        curvature = left - 2.0 * mid + right
-        if curvature < 0.0:  # a parabola through the peak places it between samples
-            shift += 0.5 * (left - right) / curvature
-    travel = complex(spectrum_q[0] - spectrum_p[0]) / n  # centroid displacement
-    tangent = p[plan.after] - p[plan.before]
+        shift = _peak(shift, *corr.take([best - 1, best, best + 1], mode="wrap").tolist())
+    return shift, complex(spectrum_q[0] - spectrum_p[0]) / n
+
+
+def _peak(shift: float, left: float, mid: float, right: float) -> float:
+    """A sampled maximum moved between samples by the parabola through it and its
+    neighbours (unmoved where they do not curve down)."""
+    curvature = left - 2.0 * mid + right
+    if curvature < 0.0:
+        shift += 0.5 * (left - right) / curvature
+    return shift
+
+
+def _aligned_diagonal(
+    p: ComplexArray, q: ComplexArray, p_walk: ComplexArray, plan: _Plan
+) -> IntArray:
+    """j - k (unwrapped) at which the fast search for each point k of P is centred.
+
+    One global cyclic shift, plus each point's lag along the contour from the
+    centroid's travel (module docstring). ``p_walk`` is ``p[plan.walk]``.
+    """
+    n, m = len(p), len(q)
+    # Q resampled to N points by index, which is by arc length for an even contour.
+    if n == m:
+        q_ring = q.take(plan.lower)
+    else:
+        below = q.take(plan.lower)
+        q_ring = q.take(plan.upper) - below
+        q_ring *= plan.weight
+        q_ring += below
+    shift, travel = _global_shift(p, q_ring)
+    pad = plan.pad
+    tangent = p_walk[pad + 1 : pad + 1 + n] - p_walk[pad - 1 : pad - 1 + n]
     # The window of a point whose finger moves along the contour fits best that many
     # points behind: (travel · unit tangent) / spacing, with |tangent| ≈ 2 × spacing
     # on an evenly resampled contour, so the divisor is mean(|tangent|²) / 2.
@@ -246,7 +325,7 @@ def _aligned_diagonal(p: ComplexArray, q: ComplexArray, plan: _Plan) -> IntArray
         lag[:] = 0.0
     diagonal = plan.drift - lag
     diagonal += shift * (m / n)
-    return np.rint(diagonal).astype(np.intp)
+    return np.rint(diagonal, out=diagonal).astype(np.intp)
 
 
 def _pick(cost: FloatArray, first: IntArray, m: int) -> IntArray:
@@ -255,16 +334,18 @@ def _pick(cost: FloatArray, first: IntArray, m: int) -> IntArray:
 
     Row r's candidates are the consecutive unwrapped indices ``first[r] + column``, so
     the first minimum along a row is already the smallest j unless the row wraps past
-    a multiple of M; only those rows are looked at again.
+    a multiple of M. In those rows the columns after the wrap are made one ulp cheaper
+    (in a copy), which moves equal costs onto them and changes no strict order.
     """
-    chosen = np.argmin(cost, axis=1)
+    chosen = cost.argmin(axis=1)
     width = cost.shape[1]
-    wraps = np.flatnonzero(first % m > m - width)
+    residue = first % m
+    wraps = (residue > m - width).nonzero()[0]
     if wraps.size:
-        sub = cost[wraps]
-        j = (first[wraps, None] + np.arange(width)) % m
-        j = np.where(sub == sub.min(axis=1, keepdims=True), j, _NO_INDEX)
-        chosen[wraps] = np.argmin(j, axis=1)
+        ranked = cost[wraps]
+        after = np.arange(width) >= (m - residue[wraps])[:, None]
+        np.nextafter(ranked, -np.inf, out=ranked, where=after)
+        chosen[wraps] = ranked.argmin(axis=1)
     return chosen
 
 
@@ -279,49 +360,105 @@ def _local_costs(
     return np.sum((gap * gap.conj()).real, axis=2)
 
 
-def _match_fast(p: ComplexArray, q: ComplexArray, half: int, search: int) -> IntArray:
-    n, m = len(p), len(q)
-    plan = _plan(n, m, half)
+def _candidate_costs(
+    p_walk: ComplexArray,
+    q: ComplexArray,
+    base: IntArray,
+    begin: int,
+    lowest: int,
+    highest: int,
+    pad: int,
+    half: int,
+    search: int,
+) -> FloatArray:
+    """D[k, k + base[r] - S + c] for the points k = begin + r of a block, r < len(base),
+    and the columns c = 0 .. 2S: shape (len(base), 2S + 1). ``lowest`` and ``highest``
+    bound ``base``; ``p_walk`` is P[k - pad .. N - 1 + pad], circular."""
+    size = len(base)
     width = 2 * search + 1
-    base = _aligned_diagonal(p, q, plan)
-    low = int(base.min()) - search
-    # Diagonals repeat every M; never build more than M distinct ones.
-    count = min(int(base.max()) + search - low + 1, m)
-    # Row d pairs P[k + i] with Q[k + i + low + d] along the diagonal j - k = low + d,
-    # the P index running h beyond both ends so windows that cross the end of either
-    # contour pair the right points. Row d is row 0 shifted by d: a strided view.
-    span = n + 2 * half
-    strip = q[np.arange(low - half, low - half + count + span - 1) % m]
-    shifted = np.lib.stride_tricks.as_strided(
-        strip, shape=(count, span), strides=(strip.strides[0], strip.strides[0]), writeable=False
-    )
-    gap = p[plan.walk] - shifted
-    total = np.zeros((count, span + 1))
-    np.cumsum((gap * gap.conj()).real, axis=1, out=total[:, 1:])
-    window_sum = total[:, 2 * half + 1 :] - total[:, :n]  # (diagonal - low, k)
-    offset = base - low - search
-    if count == m:
-        offset %= m
-    flat = (offset * n + plan.k)[:, None] + n * np.arange(width)
-    if count == m:
-        flat %= m * n
-    cost = np.take(window_sum, flat)
-    first = base + plan.k - search  # the unwrapped j of column 0
+    count = highest - lowest + width
+    # Row s of the table pairs P[begin + s - h] with Q[begin + s - h + lowest - S + d]
+    # along the diagonal j - k = lowest - S + d, s running h beyond both ends of the
+    # block so that the windows of its end points pair the right points. Row s + 1 is
+    # row s moved one point along Q: a strided view of one strip of Q.
+    span = size + 2 * half
+    first = begin + lowest - search - half
+    strip = q.take(np.arange(first, first + span + count - 1), mode="wrap")
+    step = strip.strides[0]
+    shifted = np.ndarray((span, count), np.complex128, strip, 0, (step, step))
+    start = begin + pad - half
+    gap = shifted - p_walk[start : start + span, None]
+    squares = gap.view(np.float64)
+    np.multiply(squares, squares, out=squares)
+    table = squares[:, 0::2] + squares[:, 1::2]  # squared distances
+    # Window sums down the table, in place: row r adds rows r + 1 .. r + 2h in pairs
+    # (a running sum is a chain of dependent additions, several times slower).
+    if half:
+        pairs = table[:-1] + table[1:]
+        for i in range(1, 2 * half, 2):
+            table[:size] += pairs[i : i + size]
+    # Each point's 2S + 1 candidates lie side by side in its row of the window sums:
+    # the rows of a sliding view.
+    flat = table[:size].reshape(-1)
+    step = flat.strides[0]
+    candidates = np.ndarray((len(flat) - width + 1, width), np.float64, flat, 0, (step, step))
+    offset = np.arange(0, size * count, count)
+    offset += base
+    offset -= lowest
+    cost: FloatArray = candidates[offset]
+    return cost
+
+
+def _match_fast(
+    p: ComplexArray, q: ComplexArray, half: int, search: int
+) -> tuple[IntArray, FloatArray]:
+    """Successors, shape (N,), and their window costs D[k, successor[k]], shape (N,)
+    (:func:`match_fast`)."""
+    n, m = len(p), len(q)
+    plan = _plan(n, m, half, search)
+    width = 2 * search + 1
+    p_walk = p.take(plan.walk)
+    base = _aligned_diagonal(p, q, p_walk, plan)
+    lowest, highest = int(base.min()), int(base.max())
+    if highest - lowest >= m:  # diagonals repeat every M
+        base %= m
+        lowest, highest = int(base.min()), int(base.max())
+    # Bounded blocks of points keep the table in the caches and its temporaries
+    # small enough that the allocator neither maps nor returns memory on every call
+    # (page faults cost more than the arithmetic); each block spans only the
+    # diagonals its own points need.
+    block = max(1, _TABLE_SIZE // (highest - lowest + width))
+    if block >= n:
+        cost = _candidate_costs(p_walk, q, base, 0, lowest, highest, plan.pad, half, search)
+    else:
+        blocks = []
+        for begin in range(0, n, block):
+            part = base[begin : begin + block]
+            low, high = int(part.min()), int(part.max())
+            blocks.append(
+                _candidate_costs(p_walk, q, part, begin, low, high, plan.pad, half, search)
+            )
+        cost = np.concatenate(blocks)
+    first = base + plan.first  # the unwrapped j of column 0
     chosen = _pick(cost, first, m)
     successor = first + chosen
+    minimum = cost[plan.rows, chosen]
 
     # A minimum on the edge of the range may continue beyond it: search again around
     # it until the minimum is inside (each round's cost is no larger than the last).
     if search > 0 and width < m:
-        rows = np.flatnonzero(chosen % (2 * search) == 0)
+        rows = plan.edge.take(chosen).nonzero()[0]
         for _ in range(m // search + 1):
             if rows.size == 0:
                 break
             first = successor[rows] - search
-            chosen = _pick(_local_costs(p, q, half, rows, first, width), first, m)
+            local = _local_costs(p, q, half, rows, first, width)
+            chosen = _pick(local, first, m)
             successor[rows] = first + chosen
-            rows = rows[chosen % (2 * search) == 0]
-    return successor % m
+            minimum[rows] = local[np.arange(len(rows)), chosen]
+            rows = rows[plan.edge.take(chosen)]
+    successor %= m
+    return successor, minimum
 
 
 def match_fast(previous: ArrayLike, current: ArrayLike, window: int, search: int = 3) -> IntArray:
@@ -343,7 +480,7 @@ def match_fast(previous: ArrayLike, current: ArrayLike, window: int, search: int
     q = _contour(current, "current")
     if search < 0:
         raise ValueError(f"search must be >= 0, got {search}")
-    return _match_fast(_complex(p), _complex(q), _half(window), int(search))
+    return _match_fast(_complex(p), _complex(q), _half(window), int(search))[0]
 
 
 def agreement(previous: ArrayLike, current: ArrayLike, window: int, search: int = 3) -> float:
@@ -436,9 +573,10 @@ def correspond(
         window: n of the window cost.
         method: ``"fast"`` (:func:`match_fast`), ``"exhaustive"``
             (:func:`match_exhaustive`), or ``"auto"``: exhaustive while N·M is at
-            most 256², where it was measured to be the cheaper of the two (the fast
-            matcher's fixed cost of a few dozen numpy calls outweighs the N × M
-            product below about 256 points; fingertip contours have 10-60).
+            most 256² (fingertip contours have 10-60 points), where the paper's search
+            was measured to cost at most twice the fast one (the fast matcher's fixed
+            cost of a few dozen numpy calls outweighs the N × M product below about
+            128 points).
         search: the fast matcher's half-width S.
 
     Returns:
@@ -449,16 +587,19 @@ def correspond(
     if method == "auto":
         method = "exhaustive" if len(p) * len(q) <= _AUTO_EXHAUSTIVE else "fast"
     if method == "fast":
-        successor = match_fast(p, q, window, search)
+        if search < 0:
+            raise ValueError(f"search must be >= 0, got {search}")
+        successor, cost = _match_fast(_complex(p), _complex(q), _half(window), int(search))
     elif method == "exhaustive":
         successor = match_exhaustive(p, q, window)
+        cost = window_costs(p, q, successor, window)
     else:
         raise ValueError(f"method must be 'fast', 'exhaustive' or 'auto', got {method!r}")
-    cost = window_costs(p, q, successor, window)
     n, m = len(p), len(q)
     # Among the previous points naming the same successor, the cheapest (then the
-    # lowest index) comes first; it is that current point's predecessor.
-    order = np.lexsort((np.arange(n), cost, successor))
+    # lowest index: lexsort is stable) comes first; it is that current point's
+    # predecessor.
+    order = np.lexsort((cost, successor))
     first = np.ones(n, dtype=bool)
     first[1:] = successor[order[1:]] != successor[order[:-1]]
     predecessor = np.full(m, -1, dtype=np.intp)

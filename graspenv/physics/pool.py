@@ -188,6 +188,8 @@ class ParticlePool:
             ids: particle ids, shape (n,); releasing a parked particle is an error.
         """
         ids = self._check(ids)
+        if ids.size == 0:
+            return
         self._active[ids] = False
         self._park(ids)
 
@@ -204,6 +206,8 @@ class ParticlePool:
                 on a surface of height h is at z = h + radius.
         """
         ids = self._check(ids)
+        if ids.size == 0:
+            return
         xyz = np.asarray(xyz, dtype=float).reshape(ids.size, 3)
         c = self._client
         for body, position in zip(self._bodies[ids].tolist(), xyz.tolist(), strict=True):
@@ -330,9 +334,11 @@ class ParticlePool:
 
     def _check(self, ids: ArrayLike) -> NDArray[np.int64]:
         ids = np.asarray(ids, dtype=np.int64).reshape(-1)
-        if ids.size and (ids.min() < 0 or ids.max() >= self.capacity):
+        if ids.size == 0:
+            return ids
+        if ids.min() < 0 or ids.max() >= self.capacity:
             raise IndexError(f"particle ids out of range [0, {self.capacity}): {ids}")
-        if not np.all(self._active[ids]):
+        if not self._active[ids].all():
             raise ValueError(f"particles {ids[~self._active[ids]]} are not active")
         return ids
 

@@ -64,6 +64,9 @@ _RAY_BATCH = 8192
 _RAY_CLEARANCE = 0.5
 # Points on the rim of a cylinder's end discs used to draw its footprint.
 _CYLINDER_RIM_POINTS = 32
+# An object whose top leans less than this off its base (metres) casts the shadow of
+# its top face: 1 µm, far below the penetration margin and the culling margin.
+_UPRIGHT_LEAN = 1e-6
 
 # A bottom particle may sit this far above its support before it is pulled down
 # (Bullet's resting contacts sink about 0.01-0.03 mm, never rise).
@@ -574,20 +577,40 @@ class PhysicsWorld:
             Object index, depth inside its footprint and the top height per point.
         """
         points = np.asarray(xy, dtype=float).reshape(-1, 2)
-        n = points.shape[0]
-        best = np.full(n, -np.inf)
-        owner = np.full(n, -1, dtype=np.int64)
-        for index, config in enumerate(self.scene.objects):
-            depth = self._footprint_depth(index, config, points)
-            better = (depth > margin) & (depth > best)
-            best[better] = depth[better]
-            owner[better] = index
+        owner, best = self.footprint_depth(points)
+        shallow = best <= margin
+        owner[shallow] = -1
+        best[shallow] = -np.inf
         # Rays only where a footprint holds the point: this runs every frame.
-        top = np.full(n, np.nan)
+        top = np.full(len(points), np.nan)
         inside = owner >= 0
-        if np.any(inside):
+        if inside.any():
             top[inside] = self.ray_heights(points[inside]).height
         return FootprintHits(owner, best, top)
+
+    def footprint_depth(self, xy: ArrayLike) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """How deep each point lies inside the nearest object footprint.
+
+        Args:
+            xy: points, metres, world frame, shape (N, 2).
+
+        Returns:
+            (object, depth): the index of the object whose footprint holds the point
+            deepest (or, outside every footprint, whose edge is nearest), -1 in a
+            scene without objects; and the depth, metres, negative outside. Outside
+            a box's footprint the depth is minus the distance to the nearest edge
+            *line*, which is never more than the true distance: a point is never
+            farther from an object than its depth says. Shapes (N,).
+        """
+        points = np.asarray(xy, dtype=float).reshape(-1, 2)
+        best = np.full(points.shape[0], -np.inf)
+        owner = np.full(points.shape[0], -1, dtype=np.int64)
+        for index, config in enumerate(self.scene.objects):
+            depth = self._footprint_depth(index, config, points)
+            better = depth > best
+            best[better] = depth[better]
+            owner[better] = index
+        return owner, best
 
     def contact_report(self, name: str) -> ContactReport:
         """Contacts on an object from the last physics sub-step.
@@ -697,7 +720,7 @@ class PhysicsWorld:
         if h != self.substep_dt:
             pb.setTimeStep(h, physicsClientId=client)
         flat = ids.reshape(-1)
-        if not np.all(self.pool.is_active(flat)):
+        if not self.pool.is_active(flat).all():
             raise ValueError(
                 f"step_frame got parked or unknown particles: {flat[~self.pool.is_active(flat)]}"
             )
@@ -757,41 +780,48 @@ class PhysicsWorld:
         for i in np.flatnonzero(~known).tolist():
             v[i] = pb.getBaseVelocity(bodies[i], client)[0]
         is_bottom = ~is_upper
+        all_bottom = layers == 1
         rest_z = np.zeros(0)  # set from the first sub-step's positions
         x = read_positions()
         for s in range(1, substeps + 1):
+            bottom_x = x if all_bottom else x[is_bottom]
             if s == 1:
                 # Where each bottom particle should rest: on the surface under it
                 # (rays from the particle down ignore whatever is above it). One at
                 # table level cannot be above its support and needs no ray.
-                bottom_z = x[is_bottom, 2]
-                rest_z = np.full(bottom_z.shape, self.pool.radius)
-                raised = bottom_z > self.pool.radius + _REST_TOLERANCE
-                if np.any(raised):
-                    rest_z[raised] += self._support_heights(x[is_bottom][raised])
+                rest_z = np.full(len(bottom_x), self.pool.radius)
+                raised = bottom_x[:, 2] > self.pool.radius + _REST_TOLERANCE
+                if raised.any():
+                    rest_z[raised] += self._support_heights(bottom_x[raised])
             target = start + (s / substeps) * step_xy
             v_star = feed_forward + (target - x[:, :2]) / tau
             speed = np.hypot(v_star[:, 0], v_star[:, 1])
             too_fast = speed > v_max
-            if np.any(too_fast):
+            if too_fast.any():
                 v_star[too_fast] *= (v_max / speed[too_fast])[:, None]
-            dv = gain * (v_star - v[:, :2])
+            new_v = v.copy()
+            dv = new_v[:, :2]  # a view: the planar change is written in place
+            np.subtract(v_star, dv, out=dv)
+            dv *= gain
             magnitude = np.hypot(dv[:, 0], dv[:, 1])
             too_strong = magnitude > dv_max
-            if np.any(too_strong):
+            if too_strong.any():
                 dv[too_strong] *= (dv_max / magnitude[too_strong])[:, None]
-            new_v = v.copy()
-            new_v[:, :2] += dv
+            dv += v[:, :2]
             new_v[:, 2] += press_dv
             # Friction cannot hold a bottom particle down (it is planar), and a
             # squeezed face tilted by a degree pushes it up harder than the press:
             # a bottom particle that rose above its support is pulled back by the
             # same law, so it cannot be squirted up a face or wedged under an edge.
-            excess = x[is_bottom, 2] - rest_z - _REST_TOLERANCE
-            if np.any(excess > 0):
-                vz = v[is_bottom, 2]
-                pull = np.clip(gain * (-np.maximum(excess, 0.0) / tau - vz), -dv_max, 0.0)
-                new_v[is_bottom, 2] += np.where(excess > 0, pull, 0.0)
+            excess = bottom_x[:, 2] - rest_z - _REST_TOLERANCE
+            rising = excess > 0
+            if rising.any():
+                vz = v[:, 2] if all_bottom else v[is_bottom, 2]
+                pull = np.clip(gain * (-excess / tau - vz), -dv_max, 0.0)
+                if all_bottom:
+                    new_v[rising, 2] += pull[rising]
+                else:
+                    new_v[is_bottom, 2] += np.where(rising, pull, 0.0)
             if layers > 1:
                 z_goal = x[bottom_row, 2] + rise
                 upper_z, upper_vz = x[is_upper, 2], v[is_upper, 2]
@@ -1051,16 +1081,26 @@ class PhysicsWorld:
     ) -> NDArray[np.float64]:
         body = self._object_bodies[index]
         position, orientation = pb.getBasePositionAndOrientation(body, physicsClientId=self.client)
-        centre = np.array(position)
+        centre = np.array(position[:2])
+        offset = points - centre
         if config.shape == "sphere":
-            return config.size[0] - np.hypot(*(points - centre[:2]).T)
+            return config.size[0] - np.hypot(offset[:, 0], offset[:, 1])
         rotation = np.array(pb.getMatrixFromQuaternion(orientation)).reshape(3, 3)
+        # Upright (the axis within a micrometre of vertical over the object's height),
+        # a box's shadow is its top face and a cylinder's its end disc: no hull needed.
+        # This is the common case and it runs every frame.
+        lean = math.hypot(rotation[0, 2], rotation[1, 2]) * config.height
+        if lean < _UPRIGHT_LEAN:
+            if config.shape == "box":
+                local = offset @ rotation[:2, :2]
+                half = np.array(config.size[:2]) / 2
+                return np.min(half - np.abs(local), axis=1)
+            return config.size[0] - np.hypot(offset[:, 0], offset[:, 1])
         if config.shape == "box":
-            half = np.array(config.size) / 2
             signs = np.array(
                 [[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float
             )
-            local = signs * half
+            local = signs * (np.array(config.size) / 2)
         else:
             radius, height = config.size
             angle = np.linspace(0.0, 2 * math.pi, _CYLINDER_RIM_POINTS, endpoint=False)
@@ -1071,7 +1111,7 @@ class PhysicsWorld:
                     np.column_stack([rim, np.full(len(rim), height / 2)]),
                 ]
             )
-        corners = centre[:2] + (local @ rotation.T)[:, :2]
+        corners = centre + (local @ rotation.T)[:, :2]
         return _convex_depth(_convex_hull(corners), points)
 
 

@@ -27,6 +27,13 @@ class ProxyCommand:
         bodies: for the rigid method, one handle per contact, shape (B,).
         body_targets: (x, y, yaw) of each rigid body at the end of the frame, metres
             and radians, world frame, shape (B, 3).
+        culled: contour points left without a particle this frame because they
+            cannot touch an object soon (``proxy.cull``); they are not in
+            ``particles``.
+        born: which rows of ``particles`` were put down this frame, shape (K,)
+            (persistent method; empty for the others). A pool id can be given back
+            by one point and handed to another in the same frame, so only rows not
+            born continue their point of the last frame.
     """
 
     particles: NDArray[np.int64]
@@ -34,6 +41,8 @@ class ProxyCommand:
     spin: NDArray[np.float64]
     bodies: NDArray[np.int64] = field(default_factory=lambda: np.zeros(0, np.int64))
     body_targets: NDArray[np.float64] = field(default_factory=lambda: np.zeros((0, 3)))
+    culled: int = 0
+    born: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
 
     @property
     def n_particles(self) -> int:

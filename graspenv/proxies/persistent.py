@@ -21,7 +21,15 @@ real fingertip. One camera frame:
    points whose successor did not name them release theirs.
 4. *New contact.* One particle (stack) per contour point, put down by ray casting on
    whatever is there (table or object top).
-5. *Penetration limit* (``proxy.penetration_limit``). A particle whose point lies
+5. *Culling* (``proxy.cull``). A point that cannot touch an object before the next
+   frame (farther from every object's footprint than the particle radius, twice its
+   contact's travel this frame, the fastest object's travel in a frame and
+   ``proxy.cull_margin``) has no particle: it stays a plain contour point, matched
+   like the others, and gets a particle (put down by ray casting) as it comes near.
+   Beyond that reach plus the margin again a point gives its particle back. A finger
+   squeezing a box keeps particles only on the side facing it; a hand hovering over
+   an empty part of the table costs no physics at all.
+6. *Penetration limit* (``proxy.penetration_limit``). A particle whose point lies
    deeper than ``proxy.penetration_margin`` inside an object's footprint while the
    particle is below the object's top is lifted onto the top face, instead of
    pressing the side ever harder.
@@ -33,7 +41,7 @@ paper's plain form: the raw previous contour matched against the tracker's conto
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,13 +63,18 @@ class _Track:
 
     Attributes:
         points: contour points of the last frame, metres, world frame, shape (N, 2).
-        particles: pool ids, shape (N, L), column 0 at the bottom.
+        particles: pool ids, shape (N, L), column 0 at the bottom; a row of -1 for a
+            culled point (no particle).
         centroid: the contact's centroid in the last frame, metres, shape (2,).
+        travel: how far any of its points moved in the last frame at most, metres.
+        born: which points got their particle in the last frame, shape (N,).
     """
 
     points: NDArray[np.float64]
     particles: NDArray[np.int64]
     centroid: NDArray[np.float64]
+    travel: float = 0.0
+    born: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
 
 
 class PersistentProxies:
@@ -82,6 +95,7 @@ class PersistentProxies:
         self._spacing = contacts.spacing
         self._dt = dt
         self._layers = proxy.stack_layers
+        self._cull = proxy.cull
         self._rise = proxy.stack_spacing * np.arange(self._layers)
         self._tracks: dict[int, _Track] = {}
         self.hand_turn = 0.0
@@ -99,19 +113,22 @@ class PersistentProxies:
 
         Returns:
             Contact id → its particle ids (every stack layer: points in contour
-            order, the layers of each point bottom first), shape (N·L,); contacts in
-            the order of the last frame. Copies: safe to keep.
+            order, the layers of each point bottom first; culled points have none),
+            shape (N·L,); contacts in the order of the last frame. Copies: safe to
+            keep.
         """
-        return {cid: track.particles.reshape(-1).copy() for cid, track in self._tracks.items()}
+        return {
+            cid: track.particles[track.particles[:, 0] >= 0].reshape(-1)
+            for cid, track in self._tracks.items()
+        }
 
     def update(self, frame: ContactFrame, mask: NDArray[np.uint8]) -> ProxyCommand:
         """Bookkeeping for one frame; ``mask`` is not needed by this method."""
         del mask
-        pool = self._world.pool
         for contact_id in frame.removed:
             track = self._tracks.pop(contact_id, None)
             if track is not None:
-                pool.release(track.particles.reshape(-1))
+                self._release(track.particles)
 
         continuing = [c for c in frame.continuing if c.id in self._tracks]
         turn = 0.0
@@ -130,11 +147,11 @@ class PersistentProxies:
                 spins.append(np.full(len(tracks[contact.id].points), turn / self._dt))
             else:
                 if old is not None:  # a reused id the tracker calls new: start afresh
-                    pool.release(old.particles.reshape(-1))
+                    self._release(old.particles)
                 tracks[contact.id] = self._touch_down(contact)
                 spins.append(np.zeros(len(tracks[contact.id].points)))
         for leftover in self._tracks.values():  # merged away without being listed
-            pool.release(leftover.particles.reshape(-1))
+            self._release(leftover.particles)
         self._tracks = tracks
 
         if not tracks:
@@ -142,9 +159,28 @@ class PersistentProxies:
             return ProxyCommand(empty, np.zeros((0, 2)), np.zeros(0))
         particles = np.concatenate([t.particles for t in tracks.values()])
         targets = np.concatenate([t.points for t in tracks.values()])
+        spin = np.concatenate(spins)
+        born = np.concatenate([t.born for t in tracks.values()])
+        if self._cull or self._proxy.penetration_limit:
+            owner, depth = self._world.footprint_depth(targets)
+        if self._cull:
+            travel = np.concatenate([np.full(len(t.points), t.travel) for t in tracks.values()])
+            self._cull_far(particles, targets, depth, travel, born)
+            start = 0
+            for track in tracks.values():  # the tracks keep the culling's changes
+                track.particles = particles[start : start + len(track.points)]
+                start += len(track.points)
+            embodied = particles[:, 0] >= 0
+            culled = int(np.count_nonzero(~embodied))
+            if culled:
+                particles, targets, spin = particles[embodied], targets[embodied], spin[embodied]
+                born = born[embodied]
+                owner, depth = owner[embodied], depth[embodied]
+        else:
+            culled = 0
         if self._proxy.penetration_limit:
-            self._limit_penetration(particles, targets)
-        return ProxyCommand(particles, targets, np.concatenate(spins))
+            self._limit_penetration(particles, targets, owner, depth)
+        return ProxyCommand(particles, targets, spin, culled=culled, born=born)
 
     # -- stages ------------------------------------------------------------------------
 
@@ -163,27 +199,91 @@ class PersistentProxies:
         match = correspond(predicted, current, proxy.window, proxy.matcher, proxy.search)
 
         pool = self._world.pool
-        pool.release(track.particles[~match.kept].reshape(-1))
+        self._release(track.particles[~match.kept])
         particles = np.empty((len(current), self._layers), np.int64)
         reused = match.predecessor >= 0
         particles[reused] = track.particles[match.predecessor[reused]]
         fresh = np.flatnonzero(~reused)
+        born = np.zeros(len(current), bool)
         if fresh.size:
-            ids = pool.acquire(fresh.size * self._layers).reshape(fresh.size, self._layers)
             anchors = match.anchor[fresh]
             if np.all(anchors >= 0):
-                beside = particles[anchors].reshape(-1)
-                pool.place(ids.reshape(-1), pool.positions(beside))
+                beside = particles[anchors]
+                # A culled anchor has no particle to start beside: the point stays
+                # culled until the culling gives it one.
+                placed = beside[:, 0] >= 0
+                ids = pool.acquire(int(placed.sum()) * self._layers).reshape(-1, self._layers)
+                pool.place(ids.reshape(-1), pool.positions(beside[placed].reshape(-1)))
+                particles[fresh[placed]] = ids
+                particles[fresh[~placed]] = -1
+                born[fresh[placed]] = True
+            elif self._cull:  # nothing was kept: the culling puts down what is near
+                particles[fresh] = -1
             else:  # nothing was kept: put the whole contour down afresh
+                ids = pool.acquire(fresh.size * self._layers).reshape(fresh.size, -1)
                 self._put_down(ids, current[fresh])
-            particles[fresh] = ids
-        return _Track(current, particles, contact.centroid.copy())
+                particles[fresh] = ids
+                born[fresh] = True
+        # The farthest any point moved: the centroid's step plus the turn's arc.
+        reach = float(np.max(np.hypot(*(current - contact.centroid).T)))
+        travel = float(np.hypot(*(contact.centroid - track.centroid))) + abs(turn) * reach
+        return _Track(current, particles, contact.centroid.copy(), travel, born)
 
     def _touch_down(self, contact: Contact) -> _Track:
         points = np.array(contact.contour)
+        if self._cull:  # the culling puts down the points that are near an object
+            culled = np.full((len(points), self._layers), -1)
+            return _Track(points, culled, contact.centroid.copy(), born=np.zeros(len(points), bool))
         ids = self._world.pool.acquire(len(points) * self._layers).reshape(len(points), -1)
         self._put_down(ids, points)
-        return _Track(points, ids, contact.centroid.copy())
+        return _Track(points, ids, contact.centroid.copy(), born=np.ones(len(points), bool))
+
+    def _release(self, particles: NDArray[np.int64]) -> None:
+        """Give back the particles of some rows of a track (culled rows have none)."""
+        ids = particles.reshape(-1)
+        self._world.pool.release(ids[ids >= 0])
+
+    def _cull_far(
+        self,
+        particles: NDArray[np.int64],
+        points: NDArray[np.float64],
+        depth: NDArray[np.float64],
+        travel: NDArray[np.float64],
+        born: NDArray[np.bool_],
+    ) -> None:
+        """Give particles to points near an object and take them from far ones, in place.
+
+        Args:
+            particles: (K, L) pool ids, -1 rows for culled points; updated.
+            points: the contour points, metres, (K, 2).
+            depth: each point's depth in the nearest footprint, metres (negative
+                outside), (K,).
+            travel: how far each point's contact moved in this frame at most, (K,).
+            born: which points got their particle this frame, (K,); updated.
+        """
+        world, margin = self._world, self._proxy.cull_margin
+        object_step = (
+            max(
+                (
+                    float(np.hypot(*world.object_velocity(name)[0][:2]))
+                    for name in world.object_names
+                ),
+                default=0.0,
+            )
+            * self._dt
+        )
+        reach = world.pool.radius + margin + 2.0 * travel + object_step
+        bodiless = particles[:, 0] < 0
+        near = np.flatnonzero(bodiless & (depth > -reach))
+        far = np.flatnonzero(~bodiless & (depth < -(reach + margin)))
+        if far.size:
+            self._release(particles[far])
+            particles[far] = -1
+        if near.size:
+            ids = world.pool.acquire(near.size * self._layers).reshape(near.size, -1)
+            self._put_down(ids, points[near])
+            particles[near] = ids
+            born[near] = True
 
     def _put_down(self, ids: NDArray[np.int64], points: NDArray[np.float64]) -> None:
         """Place stacks on whatever lies under their points' discs (rays from above)."""
@@ -200,16 +300,19 @@ class PersistentProxies:
         return np.column_stack([xy, z]).reshape(k * self._layers, 3)
 
     def _limit_penetration(
-        self, particles: NDArray[np.int64], targets: NDArray[np.float64]
+        self,
+        particles: NDArray[np.int64],
+        targets: NDArray[np.float64],
+        owner: NDArray[np.int64],
+        depth: NDArray[np.float64],
     ) -> None:
         world = self._world
-        hits = world.object_footprint(targets, margin=self._proxy.penetration_margin)
-        deep = np.flatnonzero(hits.object >= 0)
+        deep = np.flatnonzero((owner >= 0) & (depth > self._proxy.penetration_margin))
         if deep.size == 0:
             return
         bottom_ids = particles[deep, 0]
         z = world.pool.positions(bottom_ids)[:, 2]
-        top = hits.top[deep] + world.pool.radius
+        top = world.ray_heights(targets[deep]).height + world.pool.radius
         # A particle already on the top face stays where the physics put it.
         below = z < top - world.pool.radius
         if not np.any(below):

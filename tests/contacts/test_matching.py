@@ -13,6 +13,7 @@ from graspenv.contacts import (
     match_exhaustive,
     match_fast,
     new_point_anchors,
+    resample_closed,
     window_costs,
 )
 
@@ -130,6 +131,44 @@ def test_fast_agrees_with_exhaustive_on_realistic_finger_motion() -> None:
         total += len(previous)
     assert total > 20_000
     assert same / total >= 0.999
+
+
+def _from_predicted_start(previous: np.ndarray, current: np.ndarray) -> np.ndarray:
+    """``current`` resampled as the persistent proxy does: from the point nearest the
+    previous first point carried by the centroid's travel."""
+    perimeter = float(np.sum(np.linalg.norm(np.roll(current, -1, 0) - current, axis=1)))
+    start = previous[0] + current.mean(axis=0) - previous.mean(axis=0)
+    return resample_closed(current, perimeter / len(current), start=start)
+
+
+def test_fast_needs_no_fft_when_the_starts_correspond(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Hand outlines resampled from the predicted start are aligned by their correlation
+    at the shifts near 0 alone, and give the same successors as from any other start
+    (where the FFT aligns them) and as the exhaustive search."""
+    rng = np.random.default_rng(5)
+    pairs = []
+    for _ in range(4):
+        previous, current = hand_motion(rng)
+        pairs.append((previous, _from_predicted_start(previous, current)))
+    rolled = [match_fast(p, np.roll(q, 100, axis=0), 4, 3) for p, q in pairs]
+
+    def no_fft(*args: object, **kwargs: object) -> None:
+        raise AssertionError("the FFT was used")
+
+    monkeypatch.setattr(np.fft, "fft", no_fft)
+    for (previous, current), successor in zip(pairs, rolled, strict=True):
+        fast = match_fast(previous, current, 4, 3)
+        assert ((fast + 100) % len(current)).tolist() == successor.tolist()
+        assert fast.tolist() == match_exhaustive(previous, current, 4).tolist()
+
+
+def test_fast_on_a_long_contour_built_in_blocks() -> None:
+    """2 048 points moving 4 mm: the fast matcher's table is built block by block."""
+    t = np.linspace(0.0, 2.0 * np.pi, 2048, endpoint=False)
+    radius = 0.075 * (1.0 + 0.15 * np.sin(5.0 * t))
+    previous = np.stack([radius * np.cos(t), radius * np.sin(t)], axis=1)
+    current = 1.005 * np.roll(previous, 700, axis=0) + [0.004, 0.0]
+    assert agreement(previous, current, 4, 3) == 1.0
 
 
 def test_agreement_is_a_fraction() -> None:

@@ -65,17 +65,12 @@ CASES: list[object] = [
         )
         for mu in (0.0, 2.0)
     ),
-    pytest.param(
-        cases.merge_split,
-        id="merge and split",
-        marks=_known_broken(
-            "when the two fingertips merge (frame 18) the tracker drops one contact "
-            "and its 13 particles and re-seeds the merged contour (23 particles for "
-            "26): the box is kicked to 0.31 m/s and 7 rad/s (14.7 rad/s at frame 20), "
-            "tilts 12° and leaves the grip (no force on the merged side at frame 20); "
-            "a particle then put on its tilted top is 1.68 mm inside it (tolerance 1 mm)"
-        ),
-    ),
+    # Still rough: at the merge (frame 18) the tracker drops one contact's particles
+    # and re-seeds the merged contour, which kicks the box to 0.31 m/s (the bound is
+    # 1.37 m/s). Without culling a second kick follows (0.375 m/s at frame 20) and a
+    # particle ends 1.68 mm inside the tilted box; with culling the box settles
+    # (0.014 m/s at frame 20) and the deepest particle is 0.94 mm in (tolerance 1 mm).
+    pytest.param(cases.merge_split, id="merge and split"),
     pytest.param(
         lambda: cases.random_fingers(cases.SHOVE_INTO_A_FINGER, 24, box()),
         id="shoved into another finger",

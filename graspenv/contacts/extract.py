@@ -57,13 +57,20 @@ reported, and holes do not reduce a component's area.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Component", "find_components", "outline_from_chain", "validate_mask"]
+__all__ = [
+    "Component",
+    "find_components",
+    "outline_from_chain",
+    "outlines_from_chains",
+    "validate_mask",
+]
 
 
 def validate_mask(mask: object, shape: tuple[int, int] | None = None) -> NDArray[np.uint8]:
@@ -133,10 +140,11 @@ def find_components(mask: NDArray[np.uint8], min_area: float = 0.0) -> list[Comp
 
     Returns:
         One :class:`Component` per 8-connected component that is not inside a hole of
-        another, ordered by (topmost row, leftmost column on that row).
+        another, ordered by (topmost row, leftmost column on that row). Their
+        outlines are views of one array (:func:`outlines_from_chains`).
     """
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-    found: list[tuple[tuple[int, int], Component]] = []
+    found: list[tuple[int, NDArray[np.int32], float, NDArray[np.float64]]] = []
     for contour in contours:
         chain = np.asarray(contour, dtype=np.int32).reshape(-1, 2)
         moments = cv2.moments(contour)
@@ -154,11 +162,16 @@ def find_components(mask: NDArray[np.uint8], min_area: float = 0.0) -> list[Comp
             centroid = chain.mean(axis=0, dtype=np.float64)
         # Suzuki's outer border starts at the component's first pixel in raster order,
         # but take the minimum explicitly so the order never depends on that detail.
-        first = int(np.lexsort((chain[:, 0], chain[:, 1]))[0])
-        key = (int(chain[first, 1]), int(chain[first, 0]))
-        found.append((key, Component(chain, outline_from_chain(chain), float(area), centroid)))
+        key = int((chain[:, 1].astype(np.int64) * mask.shape[1] + chain[:, 0]).min())
+        found.append((key, chain, float(area), centroid))
+    if not found:
+        return []
     found.sort(key=lambda item: item[0])
-    return [component for _, component in found]
+    outlines, bounds = outlines_from_chains([chain for _, chain, _, _ in found])
+    return [
+        Component(chain, outlines[bounds[i] : bounds[i + 1]], area, centroid)
+        for i, (_, chain, area, centroid) in enumerate(found)
+    ]
 
 
 _CAP = 0.5  # half a pixel: the footprint edge beyond the centre of an end pixel
@@ -182,50 +195,120 @@ def outline_from_chain(chain: NDArray[np.integer]) -> NDArray[np.float64]:
         for a single pixel. See the module docstring for the offset rule and its
         measured error.
     """
-    points = np.asarray(chain, dtype=np.float64).reshape(-1, 2)
-    if len(points) == 1:
-        corners = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, 1.0], [1.0, -1.0]])
-        return points[0] + _CAP * corners
-    ring = np.concatenate([points[-1:], points, points[:1]])  # cheaper than np.roll
-    before, after = ring[:-2], ring[2:]
+    outline, _ = outlines_from_chains([np.asarray(chain).reshape(-1, 2)])
+    return outline
+
+
+def outlines_from_chains(
+    chains: Sequence[NDArray[np.integer]],
+) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """:func:`outline_from_chain` for many chains in one pass.
+
+    Chains that never double back (fingertips, palms: the per-frame case) go through
+    one fixed sequence of numpy calls together; a chain with a line or spur, or a
+    single pixel, is capped on its own.
+
+    Args:
+        chains: boundary chains, pixels (column, row), each of shape (K_i, 2).
+
+    Returns:
+        (outlines, bounds): the outlines one after another, pixels (column, row),
+        shape (L, 2), and outline i is ``outlines[bounds[i]:bounds[i + 1]]``,
+        shape (len(chains) + 1,).
+    """
+    sizes = np.array([len(c) for c in chains], dtype=np.intp)
+    bounds = np.zeros(len(chains) + 1, dtype=np.intp)
+    np.cumsum(sizes, out=bounds[1:])
+    points = np.concatenate(chains).astype(np.float64)
+    first, last = bounds[:-1], bounds[1:] - 1
+    index = np.arange(len(points))
+    after_index = index + 1
+    after_index[last] = first
+    before_index = index - 1
+    before_index[first] = last
+    before, after = points[before_index], points[after_index]
+    tangent = after - before
+    length = np.hypot(tangent[:, 0], tangent[:, 1])
     # OpenCV's outer borders have a negative shoelace area in (column, row), for
     # which (-dy, dx) of the tangent points out of the shape. Check rather than
     # trust it; a chain enclosing nothing has no inside, and either side will do.
-    twice_area = float(np.sum(points[:, 0] * after[:, 1] - points[:, 1] * after[:, 0]))
-    outward = 1.0 if twice_area <= 0.0 else -1.0
-
-    tangent = after - before
-    length = np.hypot(tangent[:, 0], tangent[:, 1])
+    cross = points[:, 0] * after[:, 1] - points[:, 1] * after[:, 0]
+    outward = np.where(np.add.reduceat(cross, first) <= 0.0, 1.0, -1.0)
     tip = length == 0.0  # the chain doubles back here: the end of a line or spur
-    length[tip] = 1.0
-    normal = tangent[:, ::-1] * np.array([-outward, outward]) / length[:, None]
-    # Half a pixel along the dominant axis of the normal: 0.5·max(|n_x|, |n_y|) along n.
-    offset = 0.5 * np.abs(normal).max(axis=1, keepdims=True)
-    outline = points + offset * normal
-    fixed = None
-    if tip.any():
-        pieces: list[NDArray[np.float64]] = []
-        start = 0
-        for end in np.flatnonzero(tip).tolist():
-            arrive = points[end] - before[end]
-            arrive /= np.hypot(arrive[0], arrive[1])
-            side = outward * np.array([-arrive[1], arrive[0]])
-            pieces.append(outline[start:end])
-            # Two corners of a square cap, in the chain's order: first on the side the
-            # chain arrives along, then on the side it leaves along.
-            pieces.append(points[end] + _CAP * np.stack([arrive + side, arrive - side]))
-            start = end + 1
-        pieces.append(outline[start:])
-        outline = np.concatenate(pieces)
-        fixed = np.concatenate([np.full(len(piece), i % 2 == 1) for i, piece in enumerate(pieces)])
-    if len(outline) < _SMOOTH_FROM:
-        return outline
+    capped = np.add.reduceat(tip, first) > 0
+    if capped.any():
+        pieces = []
+        for i in range(len(chains)):
+            lo, hi = bounds[i], bounds[i + 1]
+            if capped[i]:
+                pieces.append(_capped_outline(points[lo:hi], outward[i]))
+            else:
+                pieces.append(outlines_from_chains([chains[i]])[0])
+        sizes = np.array([len(p) for p in pieces], dtype=np.intp)
+        np.cumsum(sizes, out=bounds[1:])
+        return np.concatenate(pieces), bounds
+    side = np.repeat(outward, sizes)
+    outline = _offset_outward(points, tangent, length, side)
     # The pixel staircase is 5 % longer than the edge it follows and spaces resampled
     # points unevenly. [1, 2, 1]/4 removes the zigzag but shrinks curves; following
     # it by [-1, 6, -1]/4 restores them to fourth order: together [-1, 4, 10, 4, -1]
-    # / 16. Cap corners stay put so thin lines keep their footprint.
+    # / 16. Outlines of fewer than _SMOOTH_FROM points are left as they are.
+    smoothed = np.repeat(sizes >= _SMOOTH_FROM, sizes)
+    if not smoothed.any():
+        return outline, bounds
+    neighbours = outline[before_index] + outline[after_index]
+    far = outline[before_index[before_index]] + outline[after_index[after_index]]
+    smooth = (10.0 * outline + 4.0 * neighbours - far) / 16.0
+    if smoothed.all():
+        return smooth, bounds
+    return np.where(smoothed[:, None], smooth, outline), bounds
+
+
+def _offset_outward(
+    points: NDArray[np.float64],
+    tangent: NDArray[np.float64],
+    length: NDArray[np.float64],
+    side: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Points moved half a pixel along the dominant axis of their outward normal:
+    0.5·max(|n_x|, |n_y|) along n, n = side · (-t_y, t_x) / |t| (lengths > 0)."""
+    normal = np.empty_like(tangent)
+    normal[:, 0] = -side * tangent[:, 1] / length
+    normal[:, 1] = side * tangent[:, 0] / length
+    offset = 0.5 * np.abs(normal).max(axis=1, keepdims=True)
+    return points + offset * normal
+
+
+def _capped_outline(points: NDArray[np.float64], outward: float) -> NDArray[np.float64]:
+    """The outline of one chain that doubles back (or is a single pixel): offset as
+    everywhere, with a square cap half a pixel beyond each end, then smoothed except
+    at the caps' corners (so thin lines keep their footprint)."""
+    if len(points) == 1:
+        corners = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, 1.0], [1.0, -1.0]])
+        return points[0] + _CAP * corners
+    ring = np.concatenate([points[-1:], points, points[:1]])
+    before, after = ring[:-2], ring[2:]
+    tangent = after - before
+    length = np.hypot(tangent[:, 0], tangent[:, 1])
+    tip = length == 0.0
+    length[tip] = 1.0
+    outline = _offset_outward(points, tangent, length, np.full(len(points), outward))
+    pieces: list[NDArray[np.float64]] = []
+    start = 0
+    for end in np.flatnonzero(tip).tolist():
+        arrive = points[end] - before[end]
+        arrive /= np.hypot(arrive[0], arrive[1])
+        side = outward * np.array([-arrive[1], arrive[0]])
+        pieces.append(outline[start:end])
+        # Two corners of a square cap, in the chain's order: first on the side the
+        # chain arrives along, then on the side it leaves along.
+        pieces.append(points[end] + _CAP * np.stack([arrive + side, arrive - side]))
+        start = end + 1
+    pieces.append(outline[start:])
+    outline = np.concatenate(pieces)
+    fixed = np.concatenate([np.full(len(piece), i % 2 == 1) for i, piece in enumerate(pieces)])
+    if len(outline) < _SMOOTH_FROM:
+        return outline
     ext = np.concatenate([outline[-2:], outline, outline[:2]])
     smooth = (10.0 * outline + 4.0 * (ext[1:-3] + ext[3:-1]) - (ext[:-4] + ext[4:])) / 16.0
-    if fixed is None:
-        return smooth
     return np.where(fixed[:, None], outline, smooth)

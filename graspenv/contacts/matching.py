@@ -66,6 +66,11 @@ previous particle goes to at most one current point and every current point has 
 most one previous particle. A new particle starts at the particle of its *anchor*: the
 nearest current point along the contour (fewest index steps, the lower-index side on
 a tie) that has a predecessor.
+
+**Many contacts** (:func:`correspond_batch`): every contact of a frame in one call,
+each pair matched exactly as above; the small exhaustive searches run as one batched
+matrix product over the pairs padded to the largest, so ten fingertips cost about
+what one does.
 """
 
 from __future__ import annotations
@@ -81,6 +86,7 @@ __all__ = [
     "Correspondence",
     "agreement",
     "correspond",
+    "correspond_batch",
     "match_exhaustive",
     "match_fast",
     "new_point_anchors",
@@ -105,6 +111,9 @@ _NEAR_SHIFTS = 8
 _ALIGNED_COSINE = 0.98
 # Most table entries (points × diagonals) the fast matcher builds at once.
 _TABLE_SIZE = 1 << 14
+# correspond_batch searches contour pairs of at most this many point pairs in one
+# batched product (padded to the largest of them).
+_BATCH_PAIRS = 96 * 96
 
 
 def _contour(points: ArrayLike, name: str) -> FloatArray:
@@ -513,17 +522,31 @@ def new_point_anchors(has_predecessor: ArrayLike) -> IntArray:
         predecessor, and everywhere when no point has one.
     """
     has = np.asarray(has_predecessor, dtype=bool)
-    m = len(has)
-    anchor = np.full(m, -1, dtype=np.intp)
+    return _anchors(has, np.array([0, len(has)], dtype=np.intp))
+
+
+def _anchors(has: NDArray[np.bool_], bounds: IntArray) -> IntArray:
+    """:func:`new_point_anchors` of many contours at once (contour c is
+    ``has[bounds[c]:bounds[c + 1]]``); indices along all of them."""
+    anchor = np.full(len(has), -1, dtype=np.intp)
     kept = np.flatnonzero(has)
-    if kept.size == 0 or kept.size == m:
-        return anchor
     lone = np.flatnonzero(~has)
-    after = np.searchsorted(kept, lone)  # first kept index above each lone point
-    ahead = kept[after % kept.size]
-    behind = kept[after - 1]  # index -1 wraps to the last kept point
-    forward = (ahead - lone) % m
-    backward = (lone - behind) % m
+    if kept.size == 0 or lone.size == 0:
+        return anchor
+    sizes = np.diff(bounds)
+    owner = np.repeat(np.arange(len(sizes)), sizes)[lone]
+    # Each contour's kept points are kept[low[c]:high[c]].
+    low = np.searchsorted(kept, bounds[:-1])[owner]
+    high = np.searchsorted(kept, bounds[1:])[owner]
+    some = high > low  # a contour with no kept point leaves its lone points at -1
+    if not some.all():
+        lone, owner, low, high = lone[some], owner[some], low[some], high[some]
+    after = np.searchsorted(kept, lone)  # first kept point above each lone point
+    ahead = kept[np.where(after < high, after, low)]  # wrapping round the contour
+    behind = kept[np.where(after > low, after - 1, high - 1)]
+    size = sizes[owner]
+    forward = (ahead - lone) % size
+    backward = (lone - behind) % size
     anchor[lone] = np.where(backward <= forward, behind, ahead)
     return anchor
 
@@ -584,28 +607,139 @@ def correspond(
     """
     p = _contour(previous, "previous")
     q = _contour(current, "current")
-    if method == "auto":
-        method = "exhaustive" if len(p) * len(q) <= _AUTO_EXHAUSTIVE else "fast"
-    if method == "fast":
-        if search < 0:
-            raise ValueError(f"search must be >= 0, got {search}")
-        successor, cost = _match_fast(_complex(p), _complex(q), _half(window), int(search))
-    elif method == "exhaustive":
-        successor = match_exhaustive(p, q, window)
-        cost = window_costs(p, q, successor, window)
-    else:
+    return correspond_batch(
+        p, np.array([0, len(p)]), q, np.array([0, len(q)]), window, method, search
+    )
+
+
+def correspond_batch(
+    previous: NDArray[np.float64],
+    previous_bounds: IntArray,
+    current: NDArray[np.float64],
+    current_bounds: IntArray,
+    window: int,
+    method: Literal["fast", "exhaustive", "auto"] = "fast",
+    search: int = 3,
+) -> Correspondence:
+    """:func:`correspond` for the contours of many contacts at once.
+
+    Contour pair c is ``previous[previous_bounds[c]:previous_bounds[c + 1]]`` and
+    ``current[current_bounds[c]:current_bounds[c + 1]]``; each pair is matched on its
+    own, exactly as :func:`correspond` matches it, but the small exhaustive searches
+    (fingertips: the per-frame case) run as one batched matrix product, so a frame
+    costs the same few dozen numpy calls however many fingers touch.
+
+    Args:
+        previous: the previous contours one after another, shape (N, 2), metres.
+        previous_bounds: shape (C + 1,), from 0 to N, strictly increasing.
+        current: the current contours one after another, shape (M, 2), same frame.
+        current_bounds: shape (C + 1,), from 0 to M, strictly increasing.
+        window, method, search: as for :func:`correspond`, for every pair.
+
+    Returns:
+        A :class:`Correspondence` whose indices run along all the contours (a
+        successor of a point of pair c is a point of pair c's current contour).
+    """
+    if method not in ("fast", "exhaustive", "auto"):
         raise ValueError(f"method must be 'fast', 'exhaustive' or 'auto', got {method!r}")
-    n, m = len(p), len(q)
+    if method == "fast" and search < 0:
+        raise ValueError(f"search must be >= 0, got {search}")
+    half = _half(window)
+    n, m = np.diff(previous_bounds), np.diff(current_bounds)
+    if method == "exhaustive":
+        exhaustive = np.ones(len(n), dtype=bool)
+    elif method == "fast":
+        exhaustive = np.zeros(len(n), dtype=bool)
+    else:
+        exhaustive = n * m <= _AUTO_EXHAUSTIVE
+    successor = np.empty(len(previous), dtype=np.intp)
+    cost = np.empty(len(previous))
+    # Small exhaustive searches together; large ones and fast ones pair by pair.
+    batched = exhaustive & (n * m <= _BATCH_PAIRS)
+    if batched.any():
+        pairs = np.flatnonzero(batched)
+        _exhaustive_small(
+            previous, previous_bounds, current, current_bounds, pairs, half, successor, cost
+        )
+    for c in np.flatnonzero(~batched).tolist():
+        lo, hi = previous_bounds[c], previous_bounds[c + 1]
+        p = previous[lo:hi]
+        q = current[current_bounds[c] : current_bounds[c + 1]]
+        if exhaustive[c]:
+            local = match_exhaustive(p, q, window)
+            cost[lo:hi] = window_costs(p, q, local, window)
+        else:
+            local, cost[lo:hi] = _match_fast(_complex(p), _complex(q), half, int(search))
+        successor[lo:hi] = local + current_bounds[c]
     # Among the previous points naming the same successor, the cheapest (then the
     # lowest index: lexsort is stable) comes first; it is that current point's
     # predecessor.
     order = np.lexsort((cost, successor))
-    first = np.ones(n, dtype=bool)
+    first = np.ones(len(order), dtype=bool)
     first[1:] = successor[order[1:]] != successor[order[:-1]]
-    predecessor = np.full(m, -1, dtype=np.intp)
+    predecessor = np.full(len(current), -1, dtype=np.intp)
     predecessor[successor[order[first]]] = order[first]
-    kept = predecessor[successor] == np.arange(n)
-    anchor = new_point_anchors(predecessor >= 0)
+    kept = predecessor[successor] == np.arange(len(previous))
+    anchor = _anchors(predecessor >= 0, current_bounds)
     for array in (successor, cost, predecessor, kept, anchor):
         array.setflags(write=False)
     return Correspondence(successor, cost, predecessor, kept, anchor)
+
+
+def _window_index(bounds: IntArray, pairs: IntArray, half: int) -> tuple[IntArray, IntArray]:
+    """For the contours ``pairs`` of ``bounds``: every point's circular window of
+    2h+1 indices (along all contours), shape (K, 2h+1), and the row of each of the K
+    points within its contour."""
+    sizes = np.diff(bounds)[pairs]
+    starts = bounds[pairs]
+    owner = np.repeat(np.arange(len(pairs)), sizes)
+    offset = np.repeat(starts, sizes)
+    row = np.arange(len(owner)) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    size = sizes[owner]
+    steps = np.arange(-half, half + 1)
+    return offset[:, None] + (row[:, None] + steps) % size[:, None], row
+
+
+def _exhaustive_small(
+    previous: NDArray[np.float64],
+    previous_bounds: IntArray,
+    current: NDArray[np.float64],
+    current_bounds: IntArray,
+    pairs: IntArray,
+    half: int,
+    successor: IntArray,
+    cost: FloatArray,
+) -> None:
+    """The exhaustive search of each contour pair in ``pairs`` (small ones), as one
+    batched matrix product over the pairs padded to the largest; writes the
+    successors (indices along all current contours) and their window costs."""
+    p_window, p_row = _window_index(previous_bounds, pairs, half)
+    q_window, q_row = _window_index(current_bounds, pairs, half)
+    n, m = np.diff(previous_bounds)[pairs], np.diff(current_bounds)[pairs]
+    p_owner = np.repeat(np.arange(len(pairs)), n)
+    q_owner = np.repeat(np.arange(len(pairs)), m)
+    # About each pair's first previous point, as match_exhaustive does.
+    origin = previous[previous_bounds[pairs]]
+    pw = (previous[p_window] - origin[p_owner, None, :]).reshape(len(p_owner), -1)
+    qw = (current[q_window] - origin[q_owner, None, :]).reshape(len(q_owner), -1)
+    width = pw.shape[1]
+    left = np.zeros((len(pairs), int(n.max()), width))
+    left[p_owner, p_row] = pw
+    right = np.zeros((len(pairs), width, int(m.max())))
+    right[q_owner, :, q_row] = -2.0 * qw
+    # D = ||a||² + ||b||² - 2 a·b; ||a||² is the same along a row, so it is left out
+    # of the argmin; padded columns can never win.
+    norms = np.full((len(pairs), 1, right.shape[2]), np.inf)
+    norms[q_owner, 0, q_row] = np.einsum("ij,ij->i", qw, qw)
+    table = np.matmul(left, right)
+    table += norms
+    local = table.argmin(axis=2)[p_owner, p_row]
+    index = previous_bounds[pairs][p_owner] + p_row
+    q_start = current_bounds[pairs][p_owner]
+    successor[index] = q_start + local
+    # The window cost of each chosen pair, computed directly (exact, for the ties
+    # between previous points that name the same successor).
+    steps = np.arange(-half, half + 1)
+    window = q_start[:, None] + (local[:, None] + steps) % m[p_owner][:, None]
+    gap = previous[p_window] - current[window]
+    cost[index] = np.einsum("ijk,ijk->i", gap, gap)

@@ -10,7 +10,13 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["orient_ccw", "resample_closed", "signed_area"]
+__all__ = [
+    "orient_ccw",
+    "orient_ccw_batch",
+    "resample_closed",
+    "resample_closed_batch",
+    "signed_area",
+]
 
 
 def _as_polyline(polyline: ArrayLike, name: str = "polyline") -> NDArray[np.float64]:
@@ -62,6 +68,35 @@ def orient_ccw(polyline: ArrayLike) -> NDArray[np.float64]:
     return np.concatenate([points[:1], points[:0:-1]])
 
 
+def orient_ccw_batch(points: NDArray[np.float64], bounds: NDArray[np.intp]) -> NDArray[np.float64]:
+    """:func:`orient_ccw` for many closed polylines in one pass.
+
+    Args:
+        points: the polylines one after another, shape (T, 2), right-handed frame;
+            polyline c is ``points[bounds[c]:bounds[c + 1]]``.
+        bounds: shape (C + 1,), as in :func:`resample_closed_batch`.
+
+    Returns:
+        Shape (T, 2), same bounds: each polyline counter-clockwise (those already so
+        are unchanged; the others reversed with their first vertex kept first). The
+        input itself when every polyline already runs counter-clockwise.
+    """
+    first = bounds[:-1]
+    # The shoelace about each polyline's first vertex (see _shoelace).
+    rel = points - np.repeat(points[first], np.diff(bounds), axis=0)
+    following = np.arange(1, len(points) + 1)
+    following[bounds[1:] - 1] = first
+    cross = rel[:, 0] * rel[following, 1] - rel[:, 1] * rel[following, 0]
+    clockwise = np.flatnonzero(np.add.reduceat(cross, first) < 0.0)
+    if clockwise.size == 0:
+        return points
+    oriented = points.copy()
+    for c in clockwise.tolist():
+        lo, hi = bounds[c], bounds[c + 1]
+        oriented[lo + 1 : hi] = points[lo + 1 : hi][::-1]
+    return oriented
+
+
 def resample_closed(
     polyline: ArrayLike, spacing: float, start: ArrayLike | None = None
 ) -> NDArray[np.float64]:
@@ -90,42 +125,108 @@ def resample_closed(
             as its square, as :func:`graspenv.contacts.extract.outline_from_chain` does).
     """
     points = _as_polyline(polyline)
+    starts = None
+    if start is not None:
+        target = np.asarray(start, dtype=np.float64)
+        if target.shape != (2,) or not np.isfinite(target).all():
+            raise ValueError(f"start must be a finite point of shape (2,), got {target.shape}")
+        starts = target[None, :]
+    resampled, _ = resample_closed_batch(points, np.array([0, len(points)]), spacing, starts)
+    return resampled
+
+
+def resample_closed_batch(
+    points: NDArray[np.float64],
+    bounds: NDArray[np.intp],
+    spacing: float,
+    starts: NDArray[np.float64] | None = None,
+) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """:func:`resample_closed` for many closed polylines in one pass.
+
+    The per-frame path: every contact of a frame is resampled by the same fixed
+    sequence of numpy calls, however many there are. Polyline c gives exactly what
+    ``resample_closed(points[bounds[c]:bounds[c + 1]], spacing, starts[c])`` gives, up
+    to rounding in the last bits (its arc lengths are measured along all of them).
+
+    Args:
+        points: the polylines' vertices one after another, shape (T, 2), each closed,
+            same frame (metres, world frame for contacts), all finite.
+        bounds: polyline c is ``points[bounds[c]:bounds[c + 1]]``, shape (C + 1,),
+            ``bounds[0] == 0``, strictly increasing, ``bounds[-1] == T``.
+        spacing: requested arc length between consecutive points.
+        starts: start point of each polyline, shape (C, 2), a row of NaN for none
+            (start at the first vertex); ``None`` for none at all.
+
+    Returns:
+        (resampled, resampled_bounds): the resampled points one polyline after
+        another, shape (R, 2), and their bounds, shape (C + 1,).
+
+    Raises:
+        ValueError: a non-positive spacing or a polyline of zero perimeter.
+    """
     if not (np.isfinite(spacing) and spacing > 0.0):
         raise ValueError(f"spacing must be finite and > 0, got {spacing}")
-    step = np.concatenate([points[1:], points[:1]]) - points
+    total = len(points)
+    first, last = bounds[:-1], bounds[1:] - 1
+    following = np.arange(1, total + 1)
+    following[last] = first
+    step = points[following] - points
     length = np.hypot(step[:, 0], step[:, 1])
-    arc = np.concatenate([[0.0], np.cumsum(length)])
-    perimeter = float(arc[-1])
-    if perimeter <= 0.0:
+    cumulative = np.cumsum(length)
+    # Where each vertex lies along all the polylines, one after another.
+    arc = np.empty(total)
+    arc[0] = 0.0
+    arc[1:] = cumulative[:-1]
+    base = arc[first]
+    perimeter = cumulative[last] - base
+    if not (perimeter > 0.0).all():
         raise ValueError("polyline has zero perimeter; it needs at least two distinct points")
+    count = np.maximum(np.rint(perimeter / spacing).astype(np.intp), 3)
 
-    count = max(3, round(perimeter / spacing))
-    origin = 0.0
-    if start is not None:
-        origin = _closest_arc_position(points, step, length, arc, start)
-    targets = np.mod(origin + (perimeter / count) * np.arange(count), perimeter)
+    origin = np.zeros(len(first))
+    if starts is not None:
+        has = ~np.isnan(starts[:, 0])
+        if has.any():
+            origin[has] = (
+                _closest_arc_positions(points, bounds, step, length, arc, starts)[has] - base[has]
+            )
+
+    resampled_bounds = np.zeros(len(bounds), dtype=np.intp)
+    np.cumsum(count, out=resampled_bounds[1:])
+    which = np.repeat(np.arange(len(first)), count)
+    index = np.arange(resampled_bounds[-1]) - resampled_bounds[which]
+    targets = np.mod(origin[which] + (perimeter / count)[which] * index, perimeter[which])
+    targets += base[which]
     # side="right" skips zero-length segments (repeated vertices): a target sitting
     # exactly on a vertex is taken from the segment that leaves it.
-    segment = np.minimum(np.searchsorted(arc, targets, side="right") - 1, len(points) - 1)
-    safe = np.where(length[segment] > 0.0, length[segment], 1.0)
-    fraction = (targets - arc[segment]) / safe
-    return points[segment] + fraction[:, None] * step[segment]
+    segment = np.minimum(np.searchsorted(arc, targets, side="right") - 1, last[which])
+    edge = length[segment]
+    fraction = (targets - arc[segment]) / np.where(edge > 0.0, edge, 1.0)
+    return points[segment] + fraction[:, None] * step[segment], resampled_bounds
 
 
-def _closest_arc_position(
+def _closest_arc_positions(
     points: NDArray[np.float64],
+    bounds: NDArray[np.intp],
     step: NDArray[np.float64],
     length: NDArray[np.float64],
     arc: NDArray[np.float64],
-    start: ArrayLike,
-) -> float:
-    """Arc-length position of the polyline point closest to ``start``."""
-    target = np.asarray(start, dtype=np.float64)
-    if target.shape != (2,) or not np.isfinite(target).all():
-        raise ValueError(f"start must be a finite point of shape (2,), got {target.shape}")
+    starts: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Arc position (along all polylines) of each polyline's point closest to its
+    start (the earliest on a tie), shape (C,); NaN where the start is NaN."""
+    sizes = np.diff(bounds)
+    start = np.repeat(starts, sizes, axis=0)
     squared = length * length
-    along = np.einsum("ij,ij->i", target - points, step)
+    along = np.einsum("ij,ij->i", start - points, step)
     t = np.clip(along / np.where(squared > 0.0, squared, 1.0), 0.0, 1.0)
-    gap = points + t[:, None] * step - target
-    best = int(np.argmin(np.einsum("ij,ij->i", gap, gap)))
-    return float(arc[best] + t[best] * length[best])
+    gap = points + t[:, None] * step - start
+    distance = np.einsum("ij,ij->i", gap, gap)
+    nearest = np.minimum.reduceat(distance, bounds[:-1])
+    hits = np.flatnonzero(distance == np.repeat(nearest, sizes))
+    if hits.size == 0:
+        return np.full(len(sizes), np.nan)
+    best = hits[np.minimum(np.searchsorted(hits, bounds[:-1]), hits.size - 1)]
+    position = arc[best] + t[best] * length[best]
+    position[np.isnan(nearest)] = np.nan
+    return position

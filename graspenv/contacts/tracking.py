@@ -57,8 +57,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ContactConfig
-from graspenv.contacts.extract import find_components, validate_mask
-from graspenv.contacts.resample import orient_ccw, resample_closed
+from graspenv.contacts.extract import Component, find_components, validate_mask
+from graspenv.contacts.resample import orient_ccw_batch, resample_closed_batch
 from graspenv.surface.geometry import Surface
 
 __all__ = ["Contact", "ContactFrame", "ContactStatus", "ContactTracker"]
@@ -204,32 +204,37 @@ class ContactTracker:
                 surface's shape.
         """
         image = validate_mask(mask, self.surface.shape)
-        blobs = []
-        for component in find_components(image, self.config.min_area):
-            # One transform for the outline and the centroid (its last row).
-            world = self.surface.pixel_to_world(np.vstack([component.outline, component.centroid]))
-            blobs.append(
-                _Blob(orient_ccw(world[:-1]), world[-1], component.area * self._pixel_area)
-            )
+        components = find_components(image, self.config.min_area)
+        blobs = self._blobs(components)
         keeps, sources = self._match(self._previous, blobs)
 
         by_id = {c.id: c for c in self._previous}
+        # Every contour of the frame in one pass; a continuing one starts near its
+        # previous first point moved with the centroid.
+        starts = np.full((len(blobs), 2), np.nan)
+        for i, kept in enumerate(keeps):
+            if kept is not None:
+                before = by_id[kept]
+                starts[i] = before.contour[0] + (blobs[i].centroid - before.centroid)
+        contours: list[NDArray[np.float64]] = []
+        if blobs:
+            outlines = np.concatenate([b.outline for b in blobs])
+            bounds = np.zeros(len(blobs) + 1, dtype=np.intp)
+            np.cumsum([len(b.outline) for b in blobs], out=bounds[1:])
+            resampled, cuts = resample_closed_batch(outlines, bounds, self.config.spacing, starts)
+            contours = [resampled[cuts[i] : cuts[i + 1]] for i in range(len(blobs))]
         contacts: list[Contact] = []
         for i, blob in enumerate(blobs):
-            start = None
             kept = keeps[i]
             if kept is not None:
                 contact_id = kept
-                before = by_id[kept]
-                start = before.contour[0] + (blob.centroid - before.centroid)
             else:
                 contact_id = self._next_id
                 self._next_id += 1
-            contour = resample_closed(blob.outline, self.config.spacing, start)
             contacts.append(
                 Contact(
                     id=contact_id,
-                    contour=_frozen(contour),
+                    contour=_frozen(contours[i]),
                     outline=_frozen(blob.outline),
                     centroid=_frozen(blob.centroid),
                     area=blob.area,
@@ -244,6 +249,25 @@ class ContactTracker:
         self._previous = frame.contacts
         self._index += 1
         return frame
+
+    def _blobs(self, components: list[Component]) -> list[_Blob]:
+        """The components in world units, outlines counter-clockwise (one transform
+        for every outline and centroid of the frame)."""
+        if not components:
+            return []
+        sizes = [len(c.outline) for c in components]
+        pixels = np.concatenate(
+            [c.outline for c in components] + [c.centroid[None] for c in components]
+        )
+        world = self.surface.pixel_to_world(pixels)
+        total = sum(sizes)
+        bounds = np.zeros(len(components) + 1, dtype=np.intp)
+        np.cumsum(sizes, out=bounds[1:])
+        outlines = orient_ccw_batch(world[:total], bounds)
+        return [
+            _Blob(outlines[bounds[i] : bounds[i + 1]], world[total + i], c.area * self._pixel_area)
+            for i, c in enumerate(components)
+        ]
 
     def _match(
         self, previous: tuple[Contact, ...], blobs: list[_Blob]

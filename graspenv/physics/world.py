@@ -35,6 +35,7 @@ import contextlib
 import itertools
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from types import TracebackType
 
@@ -64,8 +65,8 @@ _RAY_BATCH = 8192
 _RAY_CLEARANCE = 0.5
 # Points on the rim of a cylinder's end discs used to draw its footprint.
 _CYLINDER_RIM_POINTS = 32
-# An object whose top leans less than this off its base (metres) casts the shadow of
-# its top face: 1 µm, far below the penetration margin and the culling margin.
+# A cylinder whose top leans less than this off its base (metres) casts the shadow of
+# its end disc: 1 µm, far below the penetration margin and the culling margin.
 _UPRIGHT_LEAN = 1e-6
 
 # A bottom particle may sit this far above its support before it is pulled down
@@ -1081,38 +1082,61 @@ class PhysicsWorld:
     ) -> NDArray[np.float64]:
         body = self._object_bodies[index]
         position, orientation = pb.getBasePositionAndOrientation(body, physicsClientId=self.client)
-        centre = np.array(position[:2])
-        offset = points - centre
+        offset = points - position[:2]
         if config.shape == "sphere":
             return config.size[0] - np.hypot(offset[:, 0], offset[:, 1])
-        rotation = np.array(pb.getMatrixFromQuaternion(orientation)).reshape(3, 3)
-        # Upright (the axis within a micrometre of vertical over the object's height),
-        # a box's shadow is its top face and a cylinder's its end disc: no hull needed.
-        # This is the common case and it runs every frame.
-        lean = math.hypot(rotation[0, 2], rotation[1, 2]) * config.height
-        if lean < _UPRIGHT_LEAN:
-            if config.shape == "box":
-                local = offset @ rotation[:2, :2]
-                half = np.array(config.size[:2]) / 2
-                return np.min(half - np.abs(local), axis=1)
-            return config.size[0] - np.hypot(offset[:, 0], offset[:, 1])
+        r = pb.getMatrixFromQuaternion(orientation)  # row-major 3 × 3
         if config.shape == "box":
-            signs = np.array(
-                [[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float
-            )
-            local = signs * (np.array(config.size) / 2)
-        else:
-            radius, height = config.size
-            angle = np.linspace(0.0, 2 * math.pi, _CYLINDER_RIM_POINTS, endpoint=False)
-            rim = np.column_stack([radius * np.cos(angle), radius * np.sin(angle)])
-            local = np.concatenate(
-                [
-                    np.column_stack([rim, np.full(len(rim), -height / 2)]),
-                    np.column_stack([rim, np.full(len(rim), height / 2)]),
-                ]
-            )
-        corners = centre + (local @ rotation.T)[:, :2]
-        return _convex_depth(_convex_hull(corners), points)
+            return _box_shadow_depth(r, config.size, offset)
+        # Upright (the axis within a micrometre of vertical over the object's height),
+        # a cylinder's shadow is its end disc: no hull needed.
+        radius, height = config.size
+        if math.hypot(r[2], r[5]) * height < _UPRIGHT_LEAN:
+            return radius - np.hypot(offset[:, 0], offset[:, 1])
+        angle = np.linspace(0.0, 2 * math.pi, _CYLINDER_RIM_POINTS, endpoint=False)
+        rim = np.column_stack([radius * np.cos(angle), radius * np.sin(angle)])
+        local = np.concatenate(
+            [
+                np.column_stack([rim, np.full(len(rim), -height / 2)]),
+                np.column_stack([rim, np.full(len(rim), height / 2)]),
+            ]
+        )
+        rotation = np.array(r).reshape(3, 3)
+        return _convex_depth(_convex_hull((local @ rotation.T)[:, :2]), offset)
+
+
+def _box_shadow_depth(
+    r: Sequence[float], size: Sequence[float], offset: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Depth of points inside the shadow of a box in any orientation (negative outside).
+
+    The shadow of a box is the Minkowski sum of its three half-axes projected on the
+    table (a zonogon, a hexagon or a rectangle): for each projected axis g_i, two of
+    its edges are parallel to g_i, at ±h_i = Σ_j |n_i · g_j| along its normal n_i.
+    The depth is the smallest h_i − |n_i · p| over the axes that do not project to
+    a point, which is what a convex polygon's depth is (the hull of the eight
+    projected corners gives the same, at three times the cost).
+
+    Args:
+        r: the box's rotation matrix, row-major, 9 values.
+        size: full extents (x, y, z), metres.
+        offset: points relative to the box's centre, metres, world frame, (N, 2).
+
+    Returns:
+        Metres, shape (N,).
+    """
+    axes = [(r[i] * size[i] / 2, r[3 + i] * size[i] / 2) for i in range(3)]
+    normals, reach = [], []
+    for gx, gy in axes:
+        length = math.hypot(gx, gy)
+        if length <= 1e-12:  # seen end-on: no edges of its own
+            continue
+        nx, ny = -gy / length, gx / length
+        normals.append((nx, ny))
+        reach.append(sum(abs(nx * ax + ny * ay) for ax, ay in axes))
+    along = offset @ np.array(normals).T  # (N, K)
+    np.abs(along, out=along)
+    return np.min(np.array(reach) - along, axis=1)
 
 
 def _initial_pose(config: ObjectConfig) -> tuple[tuple[float, ...], tuple[float, ...]]:

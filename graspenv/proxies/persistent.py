@@ -15,10 +15,11 @@ real fingertip. One camera frame:
    hand's turn. With ``proxy.predicted_resampling`` the current contour is resampled
    starting from the predicted first point, so points do not jitter along the
    contour and pull against each other. The windowed sum-of-squared-distances match
-   (:func:`graspenv.contacts.matching.correspond`) then gives each current point its
-   predecessor, whose particle it reuses; current points without one get a new
-   particle put down beside the first neighbouring point that is not new; previous
-   points whose successor did not name them release theirs.
+   (:func:`graspenv.contacts.matching.correspond_batch`: every continuing contact
+   in one call) then gives each current point its predecessor, whose particle it
+   reuses; current points without one get a new particle put down beside the first
+   neighbouring point that is not new; previous points whose successor did not name
+   them release theirs.
 4. *New contact.* One particle (stack) per contour point, put down by ray casting on
    whatever is there (table or object top).
 5. *Culling* (``proxy.cull``). A point that cannot touch an object before the next
@@ -47,8 +48,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ContactConfig, ProxyConfig
-from graspenv.contacts.matching import correspond
-from graspenv.contacts.resample import resample_closed
+from graspenv.contacts.matching import correspond_batch
+from graspenv.contacts.resample import resample_closed_batch
 from graspenv.contacts.tracking import Contact, ContactFrame
 from graspenv.geometry import rotate
 from graspenv.physics.world import PhysicsWorld
@@ -75,6 +76,13 @@ class _Track:
     centroid: NDArray[np.float64]
     travel: float = 0.0
     born: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
+
+
+def _bounds(sizes: list[int]) -> NDArray[np.intp]:
+    """Where each of several arrays laid end to end starts, and the total: (C + 1,)."""
+    bounds = np.zeros(len(sizes) + 1, dtype=np.intp)
+    np.cumsum(sizes, out=bounds[1:])
+    return bounds
 
 
 class PersistentProxies:
@@ -138,13 +146,15 @@ class PersistentProxies:
             turn = rigid_rotation(before, after)
         self.hand_turn = turn
 
+        followed = self._follow([(self._tracks[c.id], c) for c in continuing], turn)
         tracks: dict[int, _Track] = {}
         spins: list[NDArray[np.float64]] = []
         for contact in frame.contacts:
             old = self._tracks.pop(contact.id, None)
-            if old is not None and contact.status == "continuing":
-                tracks[contact.id] = self._follow(old, contact, turn)
-                spins.append(np.full(len(tracks[contact.id].points), turn / self._dt))
+            track = followed.get(contact.id)
+            if track is not None:
+                tracks[contact.id] = track
+                spins.append(np.full(len(track.points), turn / self._dt))
             else:
                 if old is not None:  # a reused id the tracker calls new: start afresh
                     self._release(old.particles)
@@ -184,50 +194,94 @@ class PersistentProxies:
 
     # -- stages ------------------------------------------------------------------------
 
-    def _follow(self, track: _Track, contact: Contact, turn: float) -> _Track:
-        proxy = self._proxy
+    def _follow(self, pairs: list[tuple[_Track, Contact]], turn: float) -> dict[int, _Track]:
+        """Continue every continuing contact's track at once (step 3 of the module
+        docstring): one resampling and one matching call for all of them."""
+        if not pairs:
+            return {}
+        proxy, layers = self._proxy, self._layers
+        before = [track for track, _ in pairs]
+        contacts = [contact for _, contact in pairs]
+        previous_bounds = _bounds([len(t.points) for t in before])
+        points = np.concatenate([t.points for t in before])
+        centroid_before = np.array([t.centroid for t in before])
+        centroid_after = np.array([c.centroid for c in contacts])
         if proxy.track_hand_rotation or proxy.predicted_resampling:
-            # Where last frame's points should be now: carried by the contact's
+            # Where last frame's points should be now: carried by their contact's
             # centroid and turned by the hand's turn (0 when that estimate is off).
-            predicted = rotate(track.points - track.centroid, turn) + contact.centroid
+            sizes = np.diff(previous_bounds)
+            predicted = rotate(points - np.repeat(centroid_before, sizes, axis=0), turn)
+            predicted += np.repeat(centroid_after, sizes, axis=0)
         else:
-            predicted = track.points
+            predicted = points
         if proxy.predicted_resampling:
-            current = resample_closed(contact.outline, self._spacing, start=predicted[0])
+            outlines = np.concatenate([c.outline for c in contacts])
+            current, current_bounds = resample_closed_batch(
+                outlines,
+                _bounds([len(c.outline) for c in contacts]),
+                self._spacing,
+                predicted[previous_bounds[:-1]],
+            )
         else:
-            current = contact.contour
-        match = correspond(predicted, current, proxy.window, proxy.matcher, proxy.search)
+            current = np.concatenate([c.contour for c in contacts])
+            current_bounds = _bounds([len(c.contour) for c in contacts])
+        match = correspond_batch(
+            predicted,
+            previous_bounds,
+            current,
+            current_bounds,
+            proxy.window,
+            proxy.matcher,
+            proxy.search,
+        )
 
         pool = self._world.pool
-        self._release(track.particles[~match.kept])
-        particles = np.empty((len(current), self._layers), np.int64)
+        previous_particles = np.concatenate([t.particles for t in before])
+        self._release(previous_particles[~match.kept])
+        particles = np.empty((len(current), layers), np.int64)
         reused = match.predecessor >= 0
-        particles[reused] = track.particles[match.predecessor[reused]]
+        particles[reused] = previous_particles[match.predecessor[reused]]
         fresh = np.flatnonzero(~reused)
         born = np.zeros(len(current), bool)
         if fresh.size:
             anchors = match.anchor[fresh]
-            if np.all(anchors >= 0):
-                beside = particles[anchors]
+            beside = fresh[anchors >= 0]
+            if beside.size:
+                anchor_particles = particles[anchors[anchors >= 0]]
                 # A culled anchor has no particle to start beside: the point stays
                 # culled until the culling gives it one.
-                placed = beside[:, 0] >= 0
-                ids = pool.acquire(int(placed.sum()) * self._layers).reshape(-1, self._layers)
-                pool.place(ids.reshape(-1), pool.positions(beside[placed].reshape(-1)))
-                particles[fresh[placed]] = ids
-                particles[fresh[~placed]] = -1
-                born[fresh[placed]] = True
-            elif self._cull:  # nothing was kept: the culling puts down what is near
-                particles[fresh] = -1
-            else:  # nothing was kept: put the whole contour down afresh
-                ids = pool.acquire(fresh.size * self._layers).reshape(fresh.size, -1)
-                self._put_down(ids, current[fresh])
-                particles[fresh] = ids
-                born[fresh] = True
-        # The farthest any point moved: the centroid's step plus the turn's arc.
-        reach = float(np.max(np.hypot(*(current - contact.centroid).T)))
-        travel = float(np.hypot(*(contact.centroid - track.centroid))) + abs(turn) * reach
-        return _Track(current, particles, contact.centroid.copy(), travel, born)
+                placed = anchor_particles[:, 0] >= 0
+                ids = pool.acquire(int(placed.sum()) * layers).reshape(-1, layers)
+                pool.place(ids.reshape(-1), pool.positions(anchor_particles[placed].reshape(-1)))
+                particles[beside[placed]] = ids
+                particles[beside[~placed]] = -1
+                born[beside[placed]] = True
+            lost = fresh[anchors < 0]  # in contacts where nothing was kept
+            if lost.size and self._cull:  # the culling puts down what is near
+                particles[lost] = -1
+            elif lost.size:  # put those contours down afresh
+                ids = pool.acquire(lost.size * layers).reshape(lost.size, -1)
+                self._put_down(ids, current[lost])
+                particles[lost] = ids
+                born[lost] = True
+        # The farthest any point of a contact moved: its centroid's step plus the
+        # turn's arc at its farthest point.
+        owner = np.repeat(np.arange(len(contacts)), np.diff(current_bounds))
+        offset = current - centroid_after[owner]
+        reach = np.maximum.reduceat(np.hypot(offset[:, 0], offset[:, 1]), current_bounds[:-1])
+        step = centroid_after - centroid_before
+        travel = np.hypot(step[:, 0], step[:, 1]) + abs(turn) * reach
+        followed = {}
+        for i, contact in enumerate(contacts):
+            lo, hi = current_bounds[i], current_bounds[i + 1]
+            followed[contact.id] = _Track(
+                current[lo:hi],
+                particles[lo:hi],
+                contact.centroid.copy(),
+                float(travel[i]),
+                born[lo:hi],
+            )
+        return followed
 
     def _touch_down(self, contact: Contact) -> _Track:
         points = np.array(contact.contour)

@@ -9,6 +9,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from graspenv.contacts import find_components, outline_from_chain, signed_area, validate_mask
+from graspenv.contacts.extract import outlines_from_chains
 
 from ._scenes import ellipse_mask_exact, ellipse_signed_distance
 
@@ -200,3 +201,24 @@ def test_outline_has_no_bias_over_random_fingertips() -> None:
         traced_errors.append(ellipse_signed_distance(component.chain.astype(float), c, axes, angle))
     assert abs(float(np.mean(np.concatenate(outline_errors)))) < 0.05
     assert float(np.mean(np.concatenate(traced_errors))) == pytest.approx(-0.46, abs=0.05)
+
+
+@pytest.mark.parametrize("with_lines", [False, True])
+def test_outlines_of_many_chains_equal_one_chain_at_a_time(with_lines: bool) -> None:
+    """Blobs of every size (the three smallest too small to smooth) in one vectorised
+    pass; with lines and a single pixel, which are capped one by one, mixed in."""
+    mask = np.zeros((60, 80), np.uint8)
+    cv2.ellipse(mask, (20, 20), (9, 6), 30.0, 0, 360, 1, -1)
+    cv2.ellipse(mask, (60, 15), (5, 8), 0.0, 0, 360, 1, -1)
+    mask[55:57, 60:62] = 1
+    if with_lines:
+        cv2.line(mask, (5, 45), (30, 50), 1, 1)
+        mask[40, 70] = 1
+    chains = [c.chain for c in find_components(mask)]
+    assert len(chains) == (5 if with_lines else 3)
+    outlines, bounds = outlines_from_chains(chains)
+    assert len(bounds) == len(chains) + 1
+    for i, chain in enumerate(chains):
+        np.testing.assert_array_equal(
+            outlines[bounds[i] : bounds[i + 1]], outline_from_chain(chain)
+        )

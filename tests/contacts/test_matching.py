@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 from graspenv.contacts import (
     agreement,
     correspond,
+    correspond_batch,
     match_exhaustive,
     match_fast,
     new_point_anchors,
@@ -270,3 +271,28 @@ def test_correspond_invariants_on_arbitrary_points(seed: int, n: int, m: int) ->
     current = rng.integers(-2, 3, size=(m, 2)).astype(float)
     _check_invariants(previous, current, "exhaustive")
     _check_invariants(previous, current, "fast")
+
+
+@pytest.mark.parametrize("method", ["exhaustive", "fast", "auto"])
+def test_many_pairs_at_once_equal_one_pair_at_a_time(method: str) -> None:
+    """Fingertips and, for auto, a hand outline (matched fast) in one call; indices
+    run along all the contours."""
+    rng = np.random.default_rng(11)
+    pairs = [fingertip_motion(rng) for _ in range(9)]
+    if method != "exhaustive":
+        pairs.insert(4, hand_motion(rng, points=300))
+    previous = np.concatenate([p for p, _ in pairs])
+    current = np.concatenate([q for _, q in pairs])
+    p_bounds = np.concatenate([[0], np.cumsum([len(p) for p, _ in pairs])])
+    q_bounds = np.concatenate([[0], np.cumsum([len(q) for _, q in pairs])])
+    batch = correspond_batch(previous, p_bounds, current, q_bounds, 4, method)  # type: ignore[arg-type]
+    for c, (p, q) in enumerate(pairs):
+        single = correspond(p, q, 4, method)  # type: ignore[arg-type]
+        rows, cols = slice(p_bounds[c], p_bounds[c + 1]), slice(q_bounds[c], q_bounds[c + 1])
+        assert (batch.successor[rows] - q_bounds[c]).tolist() == single.successor.tolist()
+        np.testing.assert_allclose(batch.cost[rows], single.cost, rtol=1e-12)
+        assert batch.kept[rows].tolist() == single.kept.tolist()
+        local = np.where(batch.predecessor[cols] >= 0, batch.predecessor[cols] - p_bounds[c], -1)
+        assert local.tolist() == single.predecessor.tolist()
+        anchor = np.where(batch.anchor[cols] >= 0, batch.anchor[cols] - q_bounds[c], -1)
+        assert anchor.tolist() == single.anchor.tolist()

@@ -8,6 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from graspenv.contacts import find_components, orient_ccw, resample_closed, signed_area
+from graspenv.contacts.resample import orient_ccw_batch, resample_closed_batch
 from graspenv.surface.geometry import Surface
 
 from ._scenes import ellipse_mask_world
@@ -159,3 +160,56 @@ def test_rendered_fingertip_contour_keeps_the_spacing(
     assert np.all(chords >= 0.8 * 0.004)
     assert np.all(chords <= 1.1 * 0.004)
     assert signed_area(points) > 0.0
+
+
+def _laid_end_to_end(polylines: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
+    bounds = np.concatenate([[0], np.cumsum([len(p) for p in polylines])])
+    return np.concatenate(polylines), bounds
+
+
+@settings(max_examples=60)
+@given(
+    st.lists(
+        st.tuples(
+            st.integers(3, 40),  # vertices
+            st.floats(0.004, 0.03),  # radius, metres
+            st.booleans(),  # a start point?
+            st.integers(0, 2**16),  # seed of the wobble and the start
+        ),
+        min_size=1,
+        max_size=8,
+    )
+)
+def test_batch_resampling_equals_one_polyline_at_a_time(shapes: list) -> None:
+    polylines, starts = [], []
+    for vertices, radius, has_start, seed in shapes:
+        rng = np.random.default_rng(seed)
+        t = np.sort(rng.uniform(0.0, 2 * np.pi, vertices))
+        r = radius * (1.0 + 0.2 * rng.uniform(-1.0, 1.0, vertices))
+        centre = rng.uniform(-0.2, 0.2, 2)
+        polylines.append(centre + np.stack([r * np.cos(t), r * np.sin(t)], axis=1))
+        starts.append(polylines[-1][rng.integers(vertices)] + 0.001 if has_start else [np.nan] * 2)
+    points, bounds = _laid_end_to_end(polylines)
+    resampled, cuts = resample_closed_batch(points, bounds, 0.003, np.array(starts))
+    assert len(cuts) == len(polylines) + 1
+    for i, polyline in enumerate(polylines):
+        start = None if np.isnan(starts[i][0]) else np.array(starts[i])
+        np.testing.assert_allclose(
+            resampled[cuts[i] : cuts[i + 1]], resample_closed(polyline, 0.003, start), atol=1e-15
+        )
+
+
+def test_batch_orientation_turns_only_the_clockwise_ones() -> None:
+    clockwise = SQUARE[::-1].copy()
+    points, bounds = _laid_end_to_end([SQUARE, clockwise, SQUARE + 5.0])
+    oriented = orient_ccw_batch(points, bounds)
+    for i, polyline in enumerate([SQUARE, clockwise, SQUARE + 5.0]):
+        np.testing.assert_array_equal(oriented[bounds[i] : bounds[i + 1]], orient_ccw(polyline))
+    already = _laid_end_to_end([SQUARE, SQUARE])
+    assert orient_ccw_batch(*already) is already[0]  # nothing to turn: no copy
+
+
+def test_batch_resampling_rejects_a_zero_perimeter_polyline() -> None:
+    points, bounds = _laid_end_to_end([SQUARE, np.zeros((3, 2))])
+    with pytest.raises(ValueError, match="zero perimeter"):
+        resample_closed_batch(points, bounds, 0.25)

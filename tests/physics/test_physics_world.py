@@ -6,6 +6,7 @@ import math
 from collections.abc import Callable
 
 import numpy as np
+import pybullet as pb
 import pytest
 
 from graspenv.physics import PhysicsWorld
@@ -68,6 +69,80 @@ def test_object_footprint_depth_margin_and_top(world: PhysicsWorld) -> None:
     shallow = world.object_footprint(points, margin=0.0)
     np.testing.assert_array_equal(shallow.object, [0, 0, -1])
     assert shallow.depth[1] == pytest.approx(0.003, abs=1e-4)
+
+
+def test_footprint_of_a_tilted_box_is_the_shadow_of_its_corners(world: PhysicsWorld) -> None:
+    """The depth in a box's shadow, in any orientation, against the depth in the convex
+    hull of its eight projected corners, computed here independently."""
+    rng = np.random.default_rng(7)
+    size = np.array([BOX_HALF * 2, BOX_HALF * 2, BOX_HEIGHT])
+    signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    for tilt in (0.0, 1e-4, 0.05, 0.7):
+        roll, pitch = tilt * rng.choice([-1.0, 1.0], 2) * rng.uniform(0.5, 1.0, 2)
+        yaw = rng.uniform(-math.pi, math.pi)
+        centre = (0.01, -0.02, 0.02)
+        body_q = _quaternion(roll, pitch, yaw)
+        # set_object_state stands objects upright; tilt the box directly.
+        body = world._object_bodies[world.object_index("box")]
+        pb.resetBasePositionAndOrientation(body, centre, body_q, physicsClientId=world.client)
+        corners = (signs * size / 2) @ _rotation(body_q).T + centre
+        shadow = np.unique(corners[:, :2].round(15), axis=0)  # upright: corners coincide
+        hull = shadow[_hull_order(shadow)]
+        points = rng.uniform(-0.06, 0.06, (200, 2))
+        expected = _polygon_depth(hull, points)
+        owner, depth = world.footprint_depth(points)
+        inside = expected > 0
+        np.testing.assert_array_equal(owner, 0)
+        np.testing.assert_array_equal(depth > 0, inside)
+        np.testing.assert_allclose(depth[inside], expected[inside], atol=1e-12)
+
+
+def _quaternion(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    cr, sr = math.cos(roll / 2), math.sin(roll / 2)
+    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
+    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
+    return np.array(
+        [
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy,
+            cr * cp * cy + sr * sp * sy,
+        ]
+    )
+
+
+def _rotation(q: np.ndarray) -> np.ndarray:
+    x, y, z, w = q
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
+
+
+def _hull_order(points: np.ndarray) -> list[int]:
+    """Gift wrapping, counter-clockwise (a few points: clarity over speed)."""
+    start = int(np.argmin(points[:, 0]))
+    order, current = [start], start
+    while True:
+        candidate = (current + 1) % len(points)
+        for i in range(len(points)):
+            a, b = points[candidate] - points[current], points[i] - points[current]
+            if a[0] * b[1] - a[1] * b[0] < -1e-15:
+                candidate = i
+        if candidate == start:
+            return order
+        order.append(candidate)
+        current = candidate
+
+
+def _polygon_depth(polygon: np.ndarray, points: np.ndarray) -> np.ndarray:
+    edges = np.roll(polygon, -1, axis=0) - polygon
+    normals = np.stack([-edges[:, 1], edges[:, 0]], axis=1)
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    return np.min(np.einsum("pkj,kj->pk", points[:, None, :] - polygon[None], normals), axis=1)
 
 
 def test_particles_collide_with_table_and_box_not_each_other(world: PhysicsWorld) -> None:

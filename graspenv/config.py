@@ -166,7 +166,13 @@ class ProxyConfig:
             alignment then a local search) or ``auto`` (exhaustive while it is the
             cheaper of the two, up to 256 × 256 point pairs, fast beyond).
         search: half-width S of the fast matcher's local search, contour indices.
-        stack_layers: spheres per contour point (1 = single layer).
+        stack_layers: spheres per contour point (1 = single layer), or ``"auto"``:
+            stacks of ``round_stack_layers`` in a scene with an object whose sides are
+            not vertical (a sphere: one layer cannot cradle a ball, it squeezes it out
+            of the grasp), single particles otherwise (boxes and cylinders stand with
+            vertical sides, which a stack would only add bodies to). Model only what
+            the scene needs; :attr:`SceneConfig.stack_layers` resolves it.
+        round_stack_layers: the stack height ``"auto"`` uses for round objects.
         stack_spacing: height between stacked spheres, metres.
         down_force: constant downward force on each bottom particle, newtons.
         penetration_limit: place a contact that appears deep inside an object's
@@ -197,7 +203,8 @@ class ProxyConfig:
     window: int = 4
     matcher: MatcherName = "auto"
     search: int = 3
-    stack_layers: int = 1
+    stack_layers: int | Literal["auto"] = "auto"
+    round_stack_layers: int = 3
     stack_spacing: float = 0.004
     down_force: float = 0.05
     penetration_limit: bool = True
@@ -212,7 +219,9 @@ class ProxyConfig:
     def __post_init__(self) -> None:
         _positive("proxy.particle_radius", (self.particle_radius,))
         _positive("proxy.particle_mass", (self.particle_mass,))
-        _positive("proxy.stack_layers", (self.stack_layers,))
+        if self.stack_layers != "auto":
+            _positive("proxy.stack_layers", (self.stack_layers,))
+        _positive("proxy.round_stack_layers", (self.round_stack_layers,))
         _positive("proxy.instant_stride", (self.instant_stride,))
         _positive("proxy.rigid_height", (self.rigid_height,))
         for key in ("window", "search"):
@@ -294,6 +303,16 @@ class SceneConfig:
         duplicates = sorted({n for n in names if names.count(n) > 1})
         if duplicates:
             raise ConfigError(f"objects: names must be unique, repeated: {duplicates}")
+
+    @property
+    def stack_layers(self) -> int:
+        """Particles per contour point in this scene: ``proxy.stack_layers``, with
+        ``"auto"`` resolved by the objects' shapes (see :class:`ProxyConfig`)."""
+        layers = self.proxy.stack_layers
+        if layers != "auto":
+            return layers
+        round_sided = any(o.shape == "sphere" for o in self.objects)
+        return self.proxy.round_stack_layers if round_sided else 1
 
     def replace(self, **sections: Any) -> SceneConfig:
         """A copy with whole sections or section fields replaced (dicts are merged)."""

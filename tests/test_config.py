@@ -107,3 +107,21 @@ def test_object_height() -> None:
         }
     )
     assert [o.height for o in config.objects] == pytest.approx([0.03, 0.04, 0.05])
+
+
+def test_stacks_only_where_the_scene_has_round_objects() -> None:
+    ball = {"name": "ball", "shape": "sphere", "size": [0.02], "mass": 0.05}
+    upright = {"name": "can", "shape": "cylinder", "size": [0.02, 0.05], "mass": 0.1}
+    assert load_config(None).proxy.stack_layers == "auto"
+    assert load_config(None).stack_layers == 1  # a box: vertical sides
+    assert load_config(None, objects=[upright]).stack_layers == 1
+    assert load_config(None, objects=[upright, ball]).stack_layers == 3
+    assert load_config(None, objects=[ball], proxy={"round_stack_layers": 2}).stack_layers == 2
+    assert load_config(None, objects=[ball], proxy={"stack_layers": 1}).stack_layers == 1
+    assert load_config(None, proxy={"stack_layers": 2}).stack_layers == 2
+
+
+@pytest.mark.parametrize("value", [0, "tall", 1.5])
+def test_stack_layers_must_be_a_positive_integer_or_auto(value: object) -> None:
+    with pytest.raises(ConfigError, match="stack_layers"):
+        load_config(None, proxy={"stack_layers": value})

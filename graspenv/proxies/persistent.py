@@ -93,16 +93,22 @@ class PersistentProxies:
         proxy: particle and matching settings.
         contacts: contour spacing (metres) for resampling continuing contours.
         dt: seconds per camera frame (turns the hand's turn into a rotation rate).
+        layers: particles per contour point (:attr:`SceneConfig.stack_layers`).
     """
 
     def __init__(
-        self, world: PhysicsWorld, proxy: ProxyConfig, contacts: ContactConfig, dt: float
+        self,
+        world: PhysicsWorld,
+        proxy: ProxyConfig,
+        contacts: ContactConfig,
+        dt: float,
+        layers: int = 1,
     ) -> None:
         self._world = world
         self._proxy = proxy
         self._spacing = contacts.spacing
         self._dt = dt
-        self._layers = proxy.stack_layers
+        self._layers = layers
         self._cull = proxy.cull
         self._rise = proxy.stack_spacing * np.arange(self._layers)
         self._tracks: dict[int, _Track] = {}

@@ -172,7 +172,8 @@ def _bench(args: argparse.Namespace) -> int:
     settings = args.setting or (QUICK_SETTINGS if args.quick else list(SETTINGS))
     scenarios = args.scenario or (QUICK_SCENARIOS if args.quick else list(SCENARIOS))
     placements = args.placements or (1 if args.quick else 3)
-    results = run_bench(settings, scenarios, args.config, _say, placements)
+    replays = args.replays or (2 if args.quick else 3)
+    results = run_bench(settings, scenarios, args.config, _say, placements, replays)
     print(markdown_table(results))
     for path in write_outputs(results, Path(args.out)):
         print(f"wrote {path}")
@@ -192,6 +193,12 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
         type=int,
         default=None,
         help="sub-pixel placements of each scene, errors averaged (default 3; --quick 1)",
+    )
+    p.add_argument(
+        "--replays",
+        type=int,
+        default=None,
+        help="timing runs of each scene; speeds are per-frame minimums (default 3; --quick 2)",
     )
     p.add_argument("--config", default=None, help="base scene file (default: built-in)")
     p.add_argument("--out", default="runs/bench", help="folder for bench.csv, bench.md, pareto.png")

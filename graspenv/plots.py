@@ -88,9 +88,11 @@ class _Axes:
         span = self.height - self.top - self.bottom
         return round(self.height - self.bottom - (value - lo) / max(hi - lo, 1e-12) * span)
 
-    def frame(self, title: str, xlabel: str, ylabel: str, xticks: bool = True) -> None:
+    def frame(
+        self, title: str, xlabel: str, ylabel: str, xticks: bool = True, yticks: bool = True
+    ) -> None:
         img = self.img
-        for tick in _ticks(*self.ylim):
+        for tick in _ticks(*self.ylim) if yticks else ():
             cv2.line(img, (self.left, self.y(tick)), (self.width - self.right, self.y(tick)), GRID)
             _text(img, _label(tick), (self.left - 6, self.y(tick)), anchor="right")
         if xticks:
@@ -230,6 +232,9 @@ def pareto_front(points: Sequence[tuple[float, float]]) -> list[int]:
     return sorted(front, key=lambda i: points[i][0])
 
 
+_LOG_TICKS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
+
+
 def pareto_chart(
     labels: Sequence[str],
     points: Sequence[tuple[float, float]],
@@ -238,30 +243,50 @@ def pareto_chart(
     xlabel: str,
     ylabel: str,
     size: tuple[int, int] = (760, 460),
+    log_error: bool = False,
 ) -> NDArray[np.uint8]:
     """Scatter of (speed, error) with a logarithmic speed axis; the Pareto front is
-    joined and labelled. Written as PNG when ``path`` is given."""
+    joined and labelled. Written as PNG when ``path`` is given.
+
+    With ``log_error`` the error axis is logarithmic too (errors below 0.01 are drawn
+    at 0.01), so one far outlier does not flatten every other point onto the floor.
+    """
+    floor = 0.01
+
+    def error(y: float) -> float:
+        return math.log10(max(y, floor)) if log_error else y
+
     finite = [(x, y) for x, y in points if x > 0 and np.isfinite(y)]
     xs = np.log10([x for x, _ in finite] or [1.0])
-    ys = [y for _, y in finite] or [1.0]
+    ys = [error(y) for _, y in finite] or [1.0]
     span = max(float(xs.max() - xs.min()), 0.3)
     xlim = (float(xs.min()) - 0.08 * span, float(xs.max()) + 0.25 * span)
-    axes = _Axes(size, xlim, (0.0, 1.12 * max(max(ys), 1e-9)))
-    axes.frame(title, xlabel, ylabel, xticks=False)
-    for value in (0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000):
+    if log_error:
+        low, high = min(ys), max(ys)
+        pad = 0.08 * max(high - low, 0.5)
+        ylim = (low - pad, high + pad)
+    else:
+        ylim = (0.0, 1.12 * max(max(ys), 1e-9))
+    axes = _Axes(size, xlim, ylim)
+    axes.frame(title, xlabel, ylabel, xticks=False, yticks=not log_error)
+    for value in _LOG_TICKS:
         lx = math.log10(value)
         if xlim[0] <= lx <= xlim[1]:
             column = axes.x(lx)
             cv2.line(axes.img, (column, axes.top), (column, axes.height - axes.bottom), GRID)
             _text(axes.img, f"{value:g}", (column, axes.height - axes.bottom + 14), anchor="centre")
+        if log_error and ylim[0] <= lx <= ylim[1]:
+            row = axes.y(lx)
+            cv2.line(axes.img, (axes.left, row), (axes.width - axes.right, row), GRID)
+            _text(axes.img, f"{value:g}", (axes.left - 6, row), anchor="right")
     front = pareto_front(points)
-    placed = [(axes.x(math.log10(points[i][0])), axes.y(points[i][1])) for i in front]
+    placed = [(axes.x(math.log10(points[i][0])), axes.y(error(points[i][1]))) for i in front]
     if len(placed) > 1:
         cv2.polylines(axes.img, [np.array(placed, np.int32)], False, PALETTE[1], 2, cv2.LINE_AA)
     for i, (x, y) in enumerate(points):
         if x <= 0 or not np.isfinite(y):
             continue
-        p = (axes.x(math.log10(x)), axes.y(y))
+        p = (axes.x(math.log10(x)), axes.y(error(y)))
         on_front = i in front
         cv2.circle(
             axes.img, p, 5 if on_front else 3, PALETTE[1] if on_front else INK, -1, cv2.LINE_AA

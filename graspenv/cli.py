@@ -158,6 +158,7 @@ def _bench(args: argparse.Namespace) -> int:
         SCENARIOS,
         SETTINGS,
         markdown_table,
+        read_csv,
         run_bench,
         write_outputs,
     )
@@ -169,11 +170,14 @@ def _bench(args: argparse.Namespace) -> int:
         print(result.text())
         print(f"wrote {result.write(Path(args.out) / 'soak.csv')}")
         return 0 if result.flat and result.violations == 0 else 1
-    settings = args.setting or (QUICK_SETTINGS if args.quick else list(SETTINGS))
-    scenarios = args.scenario or (QUICK_SCENARIOS if args.quick else list(SCENARIOS))
-    placements = args.placements or (1 if args.quick else 3)
-    replays = args.replays or (2 if args.quick else 3)
-    results = run_bench(settings, scenarios, args.config, _say, placements, replays)
+    if args.from_csv is not None:
+        results = read_csv(Path(args.from_csv))
+    else:
+        settings = args.setting or (QUICK_SETTINGS if args.quick else list(SETTINGS))
+        scenarios = args.scenario or (QUICK_SCENARIOS if args.quick else list(SCENARIOS))
+        placements = args.placements or (1 if args.quick else 3)
+        replays = args.replays or (2 if args.quick else 3)
+        results = run_bench(settings, scenarios, args.config, _say, placements, replays)
     print(markdown_table(results))
     for path in write_outputs(results, Path(args.out)):
         print(f"wrote {path}")
@@ -202,6 +206,12 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--config", default=None, help="base scene file (default: built-in)")
     p.add_argument("--out", default="runs/bench", help="folder for bench.csv, bench.md, pareto.png")
+    p.add_argument(
+        "--from-csv",
+        default=None,
+        metavar="CSV",
+        help="instead: draw the table and plot again from an earlier run's bench.csv",
+    )
     p.add_argument(
         "--soak",
         type=int,

@@ -38,6 +38,9 @@ __all__ = [
     "scene_from",
 ]
 
+#: Particle sphere radius, metres, by default (``proxy.particle_radius``).
+DEFAULT_PARTICLE_RADIUS = 0.002
+
 ShapeName = Literal["box", "sphere", "cylinder"]
 ProxyName = Literal["persistent", "instant", "rigid"]
 MatcherName = Literal["auto", "fast", "exhaustive"]
@@ -75,22 +78,41 @@ class ContactConfig:
     """How a mask becomes tracked contours.
 
     Attributes:
-        spacing: arc-length spacing of resampled contour points, metres.
+        spacing: arc-length spacing of resampled contour points, metres, or
+            ``"auto"``: one particle diameter (``2 · proxy.particle_radius``, 4 mm at
+            the defaults), so neighbouring particles just touch: closer, the spheres
+            overlap and add bodies that grip no better; farther, a corner can slip
+            between them. A scene resolves it from its own particle radius
+            (:class:`SceneConfig`); a tracker on its own, from the default radius.
         match_radius: largest centroid travel, metres per frame, for a contact to keep
             its id from one frame to the next.
         min_area: components smaller than this many pixels are dropped as noise
             (0 keeps single pixels).
     """
 
-    spacing: float = 0.004
+    spacing: float | Literal["auto"] = "auto"
     match_radius: float = 0.03
     min_area: float = 0.0
 
     def __post_init__(self) -> None:
-        _positive("contacts.spacing", (self.spacing,))
+        if self.spacing != "auto":
+            _positive("contacts.spacing", (self.spacing,))
         _positive("contacts.match_radius", (self.match_radius,))
         if self.min_area < 0:
             raise ConfigError(f"contacts.min_area must be >= 0, got {self.min_area}")
+
+    def resolved(self, particle_radius: float = DEFAULT_PARTICLE_RADIUS) -> ContactConfig:
+        """This configuration with an ``"auto"`` spacing made one particle diameter."""
+        if self.spacing != "auto":
+            return self
+        return dataclasses.replace(self, spacing=2.0 * particle_radius)
+
+    @property
+    def contour_spacing(self) -> float:
+        """The spacing in metres (``"auto"`` from the default particle radius)."""
+        spacing = self.resolved().spacing
+        assert spacing != "auto"
+        return spacing
 
 
 @dataclass(frozen=True)
@@ -197,7 +219,7 @@ class ProxyConfig:
     """
 
     method: ProxyName = "persistent"
-    particle_radius: float = 0.002
+    particle_radius: float = DEFAULT_PARTICLE_RADIUS
     particle_mass: float = 0.02
     particle_friction: float = 2.0
     window: int = 4
@@ -305,6 +327,12 @@ class SceneConfig:
             raise ConfigError(f"objects: names must be unique, repeated: {duplicates}")
 
     @property
+    def contact_settings(self) -> ContactConfig:
+        """The contacts section with an ``"auto"`` spacing made this scene's particle
+        diameter (what the tracker and the proxies use)."""
+        return self.contacts.resolved(self.proxy.particle_radius)
+
+    @property
     def stack_layers(self) -> int:
         """Particles per contour point in this scene: ``proxy.stack_layers``, with
         ``"auto"`` resolved by the objects' shapes (see :class:`ProxyConfig`)."""
@@ -333,11 +361,11 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 }
 
 #: Each preset's measured error: the worst drift, millimetres, of the final object
-#: poses of the benchmark's scenarios against the reference preset
-#: (``graspenv bench --setting preset:fast --setting preset:default``).
-#: Measured on 2026-11-22 (``graspenv bench``; README "Speed against error"); the
-#: worst scenario is the flick for ``fast`` and the two-hand carry for ``default``.
-PRESET_DRIFT_MM: dict[str, float] = {"fast": 19.01, "default": 4.66, "reference": 0.0}
+#: poses of the benchmark's scenarios against the reference preset, each the mean
+#: over three sub-pixel placements (``graspenv bench``, README "Speed against
+#: error"). Measured on 2026-12-01; the worst scenario is the flick for ``fast`` and
+#: the two-hand carry for ``default``.
+PRESET_DRIFT_MM: dict[str, float] = {"fast": 19.02, "default": 4.61, "reference": 0.0}
 
 
 def choose_fidelity(error_budget_mm: float) -> str:

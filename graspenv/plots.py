@@ -27,6 +27,7 @@ PALETTE = [
 ]
 FONT = cv2.FONT_HERSHEY_SIMPLEX
 INK = (40, 40, 40)
+MUTED = (120, 120, 120)
 GRID = (225, 225, 225)
 
 
@@ -244,9 +245,11 @@ def pareto_chart(
     ylabel: str,
     size: tuple[int, int] = (760, 460),
     log_error: bool = False,
+    labelled: Sequence[str] = (),
 ) -> NDArray[np.uint8]:
     """Scatter of (speed, error) with a logarithmic speed axis; the Pareto front is
-    joined and labelled. Written as PNG when ``path`` is given.
+    joined and labelled, and so are the points named in ``labelled`` (in grey when
+    off the front). Written as PNG when ``path`` is given.
 
     With ``log_error`` the error axis is logarithmic too (errors below 0.01 are drawn
     at 0.01), so one far outlier does not flatten every other point onto the floor.
@@ -291,6 +294,7 @@ def pareto_chart(
         cv2.circle(
             axes.img, p, 5 if on_front else 3, PALETTE[1] if on_front else INK, -1, cv2.LINE_AA
         )
-        if on_front:
-            _text(axes.img, labels[i], (p[0] + 7, p[1] - 8), 0.38)
+        if on_front or labels[i] in labelled:
+            colour = INK if on_front else MUTED
+            _text(axes.img, labels[i], (p[0] + 7, p[1] - 8), 0.38, colour=colour)
     return _write(axes.img, path)

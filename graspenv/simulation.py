@@ -87,7 +87,7 @@ class Simulation:
     def __init__(self, config: SceneConfig) -> None:
         self.config = config
         self.surface = Surface.from_config(config.surface)
-        self._tracker = ContactTracker(self.surface, config.contacts)
+        self._tracker = ContactTracker(self.surface, config.contact_settings)
         self._world = PhysicsWorld(config)
         self._proxies = make_proxies(self._world, config, self.surface)
         self._index = 0
@@ -300,7 +300,7 @@ class Simulation:
         if scene.surface != self.config.surface:
             self.surface = Surface.from_config(scene.surface)
         self._world.rebuild(scene)
-        self._tracker = ContactTracker(self.surface, scene.contacts)
+        self._tracker = ContactTracker(self.surface, scene.contact_settings)
         self._proxies = make_proxies(self._world, scene, self.surface)
         self.config = scene
 

@@ -125,3 +125,15 @@ def test_stacks_only_where_the_scene_has_round_objects() -> None:
 def test_stack_layers_must_be_a_positive_integer_or_auto(value: object) -> None:
     with pytest.raises(ConfigError, match="stack_layers"):
         load_config(None, proxy={"stack_layers": value})
+
+
+def test_contour_spacing_follows_the_particle_radius() -> None:
+    scene = load_config(None)
+    assert scene.contacts.spacing == "auto"
+    assert scene.contact_settings.spacing == 2 * scene.proxy.particle_radius == 0.004
+    bigger = scene.replace(proxy={"particle_radius": 0.003})
+    assert bigger.contact_settings.spacing == pytest.approx(0.006)
+    fixed = load_config(None, contacts={"spacing": 0.005}, proxy={"particle_radius": 0.003})
+    assert fixed.contact_settings.spacing == 0.005
+    with pytest.raises(ConfigError, match="spacing"):
+        load_config(None, contacts={"spacing": "wide"})

@@ -70,6 +70,7 @@ __all__ = [
     "SCENARIOS",
     "SETTINGS",
     "Result",
+    "read_csv",
     "run_bench",
 ]
 
@@ -656,6 +657,65 @@ def write_csv(results: Sequence[Result], path: Path) -> Path:
     return path
 
 
+_ROW_FIELDS = (
+    "setting",
+    "scenario",
+    "frames",
+    "placements",
+    "fps",
+    "realtime",
+    "bullet_share",
+    "mean_particles",
+    "tracking_rms_mm",
+    "tracking_rms_px",
+    "reference_drift_mm",
+)
+
+
+def read_csv(path: Path) -> list[Result]:
+    """The results of an earlier run from its ``bench.csv`` (values as rounded there),
+    to draw its table and plot again without running it again.
+
+    Raises:
+        ValueError: the file is not a bench CSV (a column is missing).
+    """
+    with path.open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    missing = [k for k in _ROW_FIELDS if rows and k not in rows[0]]
+    if not rows or missing:
+        raise ValueError(f"{path} is not a bench.csv: no rows or missing columns {missing}")
+
+    def number(text: str) -> float:
+        return float(text) if text != "" else math.nan
+
+    results = []
+    for row in rows:
+        stages = {k[4:]: number(v) for k, v in row.items() if k.startswith("fps_")}
+        errors = {
+            k: number(v)
+            for k, v in row.items()
+            if k not in _ROW_FIELDS and not k.startswith("fps_") and v != ""
+        }
+        results.append(
+            Result(
+                setting=row["setting"],
+                scenario=row["scenario"],
+                frames=int(row["frames"]),
+                fps=number(row["fps"]),
+                realtime=number(row["realtime"]),
+                bullet_share=number(row["bullet_share"]),
+                stage_fps=stages,
+                mean_particles=number(row["mean_particles"]),
+                tracking_rms_mm=number(row["tracking_rms_mm"]),
+                tracking_rms_px=number(row["tracking_rms_px"]),
+                reference_drift_mm=number(row["reference_drift_mm"]),
+                errors=errors,
+                placements=int(row["placements"]),
+            )
+        )
+    return results
+
+
 HEADLINE = {
     "turn": "yaw_error_deg",
     "slide": "travel_error_mm",
@@ -696,6 +756,10 @@ def _abs_error(result: Result, key: str) -> float:
     return result.errors.get(f"abs_{key}", abs(result.errors[key]))
 
 
+#: Settings the Pareto plot names even off the front.
+PRESET_LABELS = ("default", "reference", "preset:fast")
+
+
 def pareto_png(results: Sequence[Result], path: Path) -> Path:
     """Two panels, one point per setting, speed = the canonical turn's real-time
     factor: its |yaw error| against ground truth, and the mean drift of every
@@ -718,6 +782,7 @@ def pareto_png(results: Sequence[Result], path: Path) -> Path:
         "x real time (60 Hz camera), log scale",
         "|yaw error| (deg), log scale",
         log_error=True,
+        labelled=PRESET_LABELS,
     )
     bottom = pareto_chart(
         kept,
@@ -727,6 +792,7 @@ def pareto_png(results: Sequence[Result], path: Path) -> Path:
         "x real time of the canonical turn, log scale",
         "mean drift (mm), log scale",
         log_error=True,
+        labelled=PRESET_LABELS,
     )
     return write_png(np.vstack([top, bottom]), path)
 

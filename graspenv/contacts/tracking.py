@@ -177,7 +177,8 @@ class ContactTracker:
 
     def __init__(self, surface: Surface, config: ContactConfig | None = None) -> None:
         self.surface = surface
-        self.config = config if config is not None else ContactConfig()
+        self.config = (config if config is not None else ContactConfig()).resolved()
+        self._spacing = self.config.contour_spacing
         self._pixel_area = float(np.prod(surface.pixel_size))
         self._previous: tuple[Contact, ...] = ()
         self._next_id = 0
@@ -221,7 +222,7 @@ class ContactTracker:
             outlines = np.concatenate([b.outline for b in blobs])
             bounds = np.zeros(len(blobs) + 1, dtype=np.intp)
             np.cumsum([len(b.outline) for b in blobs], out=bounds[1:])
-            resampled, cuts = resample_closed_batch(outlines, bounds, self.config.spacing, starts)
+            resampled, cuts = resample_closed_batch(outlines, bounds, self._spacing, starts)
             contours = [resampled[cuts[i] : cuts[i + 1]] for i in range(len(blobs))]
         contacts: list[Contact] = []
         for i, blob in enumerate(blobs):

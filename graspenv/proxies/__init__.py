@@ -24,7 +24,9 @@ def make_proxies(world: PhysicsWorld, scene: SceneConfig, surface: Surface) -> P
     """The proxy method ``scene.proxy.method`` names, bound to a world."""
     method = scene.proxy.method
     if method == "persistent":
-        return PersistentProxies(world, scene.proxy, scene.contacts, surface.dt, scene.stack_layers)
+        return PersistentProxies(
+            world, scene.proxy, scene.contact_settings, surface.dt, scene.stack_layers
+        )
     if method == "instant":
         return InstantProxies(world, scene.proxy, surface)
     return RigidProxies(world, scene.proxy)

@@ -106,7 +106,7 @@ class PersistentProxies:
     ) -> None:
         self._world = world
         self._proxy = proxy
-        self._spacing = contacts.spacing
+        self._spacing = contacts.contour_spacing
         self._dt = dt
         self._layers = layers
         self._cull = proxy.cull

@@ -15,6 +15,7 @@ import pytest
 from graspenv.bench.frontier import (
     SCENARIOS,
     SETTINGS,
+    read_csv,
     run_bench,
     slip,
     turn,
@@ -64,6 +65,18 @@ def test_bench_writes_csv_table_and_pareto_plot(tmp_path: Path) -> None:
     picture = cv2.imread(str(tmp_path / "pareto.png"))
     assert picture is not None and picture.shape[0] > picture.shape[1] / 2
     assert len(files) == 3
+    # An earlier run's table and plot can be drawn again from its CSV alone.
+    again = read_csv(tmp_path / "bench.csv")
+    assert [(r.setting, r.scenario) for r in again] == [(r.setting, r.scenario) for r in results]
+    for before, after in zip(results, again, strict=True):
+        assert after.realtime == pytest.approx(before.realtime, abs=0.005)
+        assert after.errors["yaw_error_deg"] == pytest.approx(
+            before.errors["yaw_error_deg"], abs=5e-5
+        )
+    assert write_outputs(again, tmp_path / "again")[2].stat().st_size > 0
+    (tmp_path / "other.csv").write_text("a,b\n1,2\n")
+    with pytest.raises(ValueError, match=r"not a bench\.csv"):
+        read_csv(tmp_path / "other.csv")
 
 
 def test_unknown_names_are_refused() -> None:

@@ -195,7 +195,10 @@ def outline_from_chain(chain: NDArray[np.integer]) -> NDArray[np.float64]:
         for a single pixel. See the module docstring for the offset rule and its
         measured error.
     """
-    outline, _ = outlines_from_chains([np.asarray(chain).reshape(-1, 2)])
+    points = np.asarray(chain).reshape(-1, 2)
+    if len(points) == 0:
+        return np.zeros((0, 2))
+    outline, _ = outlines_from_chains([points])
     return outline
 
 
@@ -209,7 +212,8 @@ def outlines_from_chains(
     single pixel, is capped on its own.
 
     Args:
-        chains: boundary chains, pixels (column, row), each of shape (K_i, 2).
+        chains: boundary chains, pixels (column, row), each of shape (K_i, 2) with
+            K_i >= 1.
 
     Returns:
         (outlines, bounds): the outlines one after another, pixels (column, row),
@@ -237,13 +241,15 @@ def outlines_from_chains(
     tip = length == 0.0  # the chain doubles back here: the end of a line or spur
     capped = np.add.reduceat(tip, first) > 0
     if capped.any():
-        pieces = []
-        for i in range(len(chains)):
-            lo, hi = bounds[i], bounds[i + 1]
-            if capped[i]:
-                pieces.append(_capped_outline(points[lo:hi], outward[i]))
-            else:
-                pieces.append(outlines_from_chains([chains[i]])[0])
+        # The capped ones one by one, the others together again, in the chains' order.
+        plain = np.flatnonzero(~capped).tolist()
+        pieces: list[NDArray[np.float64]] = [np.zeros((0, 2))] * len(chains)
+        if plain:
+            together, cuts = outlines_from_chains([chains[i] for i in plain])
+            for k, i in enumerate(plain):
+                pieces[i] = together[cuts[k] : cuts[k + 1]]
+        for i in np.flatnonzero(capped).tolist():
+            pieces[i] = _capped_outline(points[bounds[i] : bounds[i + 1]], outward[i])
         sizes = np.array([len(p) for p in pieces], dtype=np.intp)
         np.cumsum(sizes, out=bounds[1:])
         return np.concatenate(pieces), bounds

@@ -154,8 +154,8 @@ def resample_closed_batch(
         bounds: polyline c is ``points[bounds[c]:bounds[c + 1]]``, shape (C + 1,),
             ``bounds[0] == 0``, strictly increasing, ``bounds[-1] == T``.
         spacing: requested arc length between consecutive points.
-        starts: start point of each polyline, shape (C, 2), a row of NaN for none
-            (start at the first vertex); ``None`` for none at all.
+        starts: start point of each polyline, shape (C, 2), a row with a NaN for
+            none (start at the first vertex); ``None`` for none at all.
 
     Returns:
         (resampled, resampled_bounds): the resampled points one polyline after
@@ -185,7 +185,7 @@ def resample_closed_batch(
 
     origin = np.zeros(len(first))
     if starts is not None:
-        has = ~np.isnan(starts[:, 0])
+        has = ~np.isnan(starts).any(axis=1)
         if has.any():
             origin[has] = (
                 _closest_arc_positions(points, bounds, step, length, arc, starts)[has] - base[has]

@@ -78,7 +78,8 @@ class Contact:
     Attributes:
         id: stable while the contact is tracked (see the module docstring).
         contour: metres, world frame, shape (N, 2), N ≥ 3, counter-clockwise seen
-            from above, resampled evenly at ``ContactConfig.spacing``; read-only.
+            from above, resampled evenly at the tracker's spacing
+            (``ContactConfig.spacing``, ``"auto"`` resolved); read-only.
         outline: the un-resampled boundary, metres, world frame, shape (L, 2),
             counter-clockwise, on the pixel footprint's edge rather than through the
             boundary pixels' centres, lightly smoothed

@@ -596,12 +596,14 @@ class PhysicsWorld:
             xy: points, metres, world frame, shape (N, 2).
 
         Returns:
-            (object, depth): the index of the object whose footprint holds the point
-            deepest (or, outside every footprint, whose edge is nearest), -1 in a
-            scene without objects; and the depth, metres, negative outside. Outside
-            a box's footprint the depth is minus the distance to the nearest edge
-            *line*, which is never more than the true distance: a point is never
-            farther from an object than its depth says. Shapes (N,).
+            (object, depth): the index of the object with the largest depth (the
+            footprint that holds the point deepest or, outside every footprint, the
+            one it lies least far outside by this measure), -1 in a scene without
+            objects; and the depth, metres, negative outside. Outside a box's
+            footprint the depth is minus the distance beyond the farthest edge
+            *line* the point lies outside of, which is never more than the true
+            distance: a point is never nearer an object than its depth says (what
+            culling needs to be safe). Shapes (N,).
         """
         points = np.asarray(xy, dtype=float).reshape(-1, 2)
         best = np.full(points.shape[0], -np.inf)

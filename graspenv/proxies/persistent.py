@@ -102,7 +102,7 @@ class PersistentProxies:
         proxy: ProxyConfig,
         contacts: ContactConfig,
         dt: float,
-        layers: int = 1,
+        layers: int,
     ) -> None:
         self._world = world
         self._proxy = proxy
@@ -196,7 +196,8 @@ class PersistentProxies:
             culled = 0
         if self._proxy.penetration_limit:
             self._limit_penetration(particles, targets, owner, depth)
-        return ProxyCommand(particles, targets, spin, culled=culled, born=born)
+        # A copy: the tracks keep views of ``particles`` when nothing was culled.
+        return ProxyCommand(particles.copy(), targets, spin, culled=culled, born=born)
 
     # -- stages ------------------------------------------------------------------------
 

@@ -296,3 +296,12 @@ def test_many_pairs_at_once_equal_one_pair_at_a_time(method: str) -> None:
         assert local.tolist() == single.predecessor.tolist()
         anchor = np.where(batch.anchor[cols] >= 0, batch.anchor[cols] - q_bounds[c], -1)
         assert anchor.tolist() == single.anchor.tolist()
+
+
+def test_auto_refuses_a_negative_search_where_it_would_match_fast() -> None:
+    rng = np.random.default_rng(2)
+    previous, current = hand_motion(rng, points=300)  # 300 × 300 pairs: fast
+    with pytest.raises(ValueError, match="search must be >= 0"):
+        correspond(previous, current, 4, "auto", -1)
+    small = fingertip_motion(rng)  # exhaustive: the search is not used
+    assert len(correspond(*small, 4, "auto", -1).successor) == len(small[0])

@@ -53,8 +53,15 @@ _CREATION_MASS = 1.0e6
 _IDENTITY = (0.0, 0.0, 0.0, 1.0)
 _ZERO = (0.0, 0.0, 0.0)
 # Friction scaling in the particle's own frame, whose z stays the world's z (a
-# particle only ever spins about z).
-_PLANAR_FRICTION = (1.0, 1.0, 0.0)
+# particle only ever spins about z). Planar friction keeps a millionth of its
+# vertical part rather than none: Bullet scales a contact's friction direction by
+# these factors without normalising it again, so on a vertical face where the
+# particle slides only straight down (held still, pressed) the direction would be
+# zero and the solver divides by it; the whole world turned NaN in the first frame
+# (tests/physics/test_physics_control.py). A millionth of the friction along z
+# cannot lift a particle or a face (a thousandth, also safe, doubled the turn's
+# error in the one run measured).
+_PLANAR_FRICTION = (1.0, 1.0, 1.0e-6)
 _FULL_FRICTION = (1.0, 1.0, 1.0)
 
 

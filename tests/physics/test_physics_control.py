@@ -124,3 +124,26 @@ def test_squeeze_and_turn_with_ideal_targets_reaches_the_yaw(world: PhysicsWorld
     assert yaw == pytest.approx(90.0, abs=1.0)
     assert np.hypot(position[0], position[1]) < 0.002
     assert position[2] == pytest.approx(BOX_HEIGHT / 2, abs=1e-3)
+
+
+@pytest.mark.parametrize("side", [1.0, -1.0])
+@pytest.mark.parametrize("offset", [-4e-4, -2e-4, 0.0, 1e-9, 2e-4])
+def test_a_particle_resting_against_a_face_stays_finite(
+    make_world: Callable[..., PhysicsWorld], side: float, offset: float
+) -> None:
+    """A bottom particle held still against a box's side, on the face's centre line.
+
+    Its only motion along the face is the press, straight down; planar friction with
+    no vertical part at all would then make the friction direction of that contact
+    zero, and Bullet's solver divides by it (the whole world became NaN in the first
+    frame for a third of these placements).
+    """
+    world = make_world()
+    r = world.scene.proxy.particle_radius
+    x = side * (BOX_HALF + r + offset)
+    ids = world.pool.acquire(1)
+    world.pool.place(ids, [[x, 0.0, r]])
+    for _ in range(5):
+        world.step_frame(ids, [[x, 0.0]])
+        assert np.isfinite(world.pool.positions(ids)).all()
+        assert all(np.isfinite(part).all() for part in world.object_pose("box"))

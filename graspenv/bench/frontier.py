@@ -294,6 +294,8 @@ def slip(base: SceneConfig, offset: Offset = (0.0, 0.0), replays: int = 1) -> Pl
             if state["start"] is None:
                 report = sim.contact_report("box")
                 ids = np.unique(report.particle[report.particle >= 0])
+                if ids.size == 0:  # no particle grips it (rigid proxies): no figure
+                    return True
                 state["ids"] = ids
                 state["start"] = position[:2].copy()
                 state["grip_start"] = sim.world.pool.positions(ids)[:, :2].mean(axis=0)

@@ -64,9 +64,12 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from graspenv.contacts.resample import bounds_of
+
 __all__ = [
     "Component",
     "find_components",
+    "find_components_batch",
     "outline_from_chain",
     "outlines_from_chains",
     "validate_mask",
@@ -140,8 +143,21 @@ def find_components(mask: NDArray[np.uint8], min_area: float = 0.0) -> list[Comp
 
     Returns:
         One :class:`Component` per 8-connected component that is not inside a hole of
-        another, ordered by (topmost row, leftmost column on that row). Their
-        outlines are views of one array (:func:`outlines_from_chains`).
+        another, ordered by (topmost row, leftmost column on that row).
+    """
+    return find_components_batch(mask, min_area)[0]
+
+
+def find_components_batch(
+    mask: NDArray[np.uint8], min_area: float = 0.0
+) -> tuple[list[Component], NDArray[np.float64], NDArray[np.intp]]:
+    """:func:`find_components`, with the outlines also as one array (the per-frame path:
+    the next stages take every outline of the frame at once).
+
+    Returns:
+        (components, outlines, bounds): the components; all their outlines one after
+        another, pixels (column, row), shape (L, 2), of which each component's
+        ``outline`` is a view; component i's is ``outlines[bounds[i]:bounds[i + 1]]``.
     """
     contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     found: list[tuple[int, NDArray[np.int32], float, NDArray[np.float64]]] = []
@@ -165,13 +181,14 @@ def find_components(mask: NDArray[np.uint8], min_area: float = 0.0) -> list[Comp
         key = int((chain[:, 1].astype(np.int64) * mask.shape[1] + chain[:, 0]).min())
         found.append((key, chain, float(area), centroid))
     if not found:
-        return []
+        return [], np.zeros((0, 2)), np.zeros(1, dtype=np.intp)
     found.sort(key=lambda item: item[0])
     outlines, bounds = outlines_from_chains([chain for _, chain, _, _ in found])
-    return [
+    components = [
         Component(chain, outlines[bounds[i] : bounds[i + 1]], area, centroid)
         for i, (_, chain, area, centroid) in enumerate(found)
     ]
+    return components, outlines, bounds
 
 
 _CAP = 0.5  # half a pixel: the footprint edge beyond the centre of an end pixel
@@ -221,8 +238,7 @@ def outlines_from_chains(
         shape (len(chains) + 1,).
     """
     sizes = np.array([len(c) for c in chains], dtype=np.intp)
-    bounds = np.zeros(len(chains) + 1, dtype=np.intp)
-    np.cumsum(sizes, out=bounds[1:])
+    bounds = bounds_of(sizes)
     points = np.concatenate(chains).astype(np.float64)
     first, last = bounds[:-1], bounds[1:] - 1
     index = np.arange(len(points))
@@ -250,9 +266,7 @@ def outlines_from_chains(
                 pieces[i] = together[cuts[k] : cuts[k + 1]]
         for i in np.flatnonzero(capped).tolist():
             pieces[i] = _capped_outline(points[bounds[i] : bounds[i + 1]], outward[i])
-        sizes = np.array([len(p) for p in pieces], dtype=np.intp)
-        np.cumsum(sizes, out=bounds[1:])
-        return np.concatenate(pieces), bounds
+        return np.concatenate(pieces), bounds_of([len(p) for p in pieces])
     side = np.repeat(outward, sizes)
     outline = _offset_outward(points, tangent, length, side)
     # The pixel staircase is 5 % longer than the edge it follows and spaces resampled

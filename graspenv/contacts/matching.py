@@ -82,6 +82,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from graspenv.contacts.resample import bounds_of, owners_of
+
 __all__ = [
     "Correspondence",
     "agreement",
@@ -129,11 +131,21 @@ def _half(window: int) -> int:
     return int(window) // 2
 
 
+def _circular_windows(
+    start: IntArray | int, centre: IntArray, size: IntArray | int, half: int
+) -> IntArray:
+    """Indices of the 2h+1-point circular window around each point ``centre`` of a
+    contour that starts at ``start`` (along all contours laid end to end) and has
+    ``size`` points; ``start`` and ``size`` per point or one for all; (K, 2h+1)."""
+    steps = np.arange(-half, half + 1)
+    wrapped = (centre[:, None] + steps) % np.asarray(size)[..., None]
+    return np.asarray(start)[..., None] + wrapped
+
+
 def _windows(points: FloatArray, half: int) -> FloatArray:
     """Each point's circular window of 2h+1 points, flattened: shape (N, 2(2h+1))."""
     n = len(points)
-    index = (np.arange(n)[:, None] + np.arange(-half, half + 1)[None, :]) % n
-    return points[index].reshape(n, -1)
+    return points[_circular_windows(0, np.arange(n), n, half)].reshape(n, -1)
 
 
 def match_exhaustive(previous: ArrayLike, current: ArrayLike, window: int) -> IntArray:
@@ -192,9 +204,8 @@ def window_costs(
     q = _contour(current, "current")
     half = _half(window)
     j = np.asarray(successor, dtype=np.intp)
-    offsets = np.arange(-half, half + 1)
-    gap = p[(np.arange(len(p))[:, None] + offsets) % len(p)]
-    gap = gap - q[(j[:, None] + offsets) % len(q)]
+    gap = p[_circular_windows(0, np.arange(len(p)), len(p), half)]
+    gap = gap - q[_circular_windows(0, j, len(q), half)]
     return np.einsum("ijk,ijk->i", gap, gap)
 
 
@@ -691,20 +702,6 @@ def correspond_batch(
     return Correspondence(successor, cost, predecessor, kept, anchor)
 
 
-def _window_index(bounds: IntArray, pairs: IntArray, half: int) -> tuple[IntArray, IntArray]:
-    """For the contours ``pairs`` of ``bounds``: every point's circular window of
-    2h+1 indices (along all contours), shape (K, 2h+1), and the row of each of the K
-    points within its contour."""
-    sizes = np.diff(bounds)[pairs]
-    starts = bounds[pairs]
-    owner = np.repeat(np.arange(len(pairs)), sizes)
-    offset = np.repeat(starts, sizes)
-    row = np.arange(len(owner)) - np.repeat(np.cumsum(sizes) - sizes, sizes)
-    size = sizes[owner]
-    steps = np.arange(-half, half + 1)
-    return offset[:, None] + (row[:, None] + steps) % size[:, None], row
-
-
 def _exhaustive_small(
     previous: NDArray[np.float64],
     previous_bounds: IntArray,
@@ -718,15 +715,19 @@ def _exhaustive_small(
     """The exhaustive search of each contour pair in ``pairs`` (small ones), as one
     batched matrix product over the pairs padded to the largest; writes the
     successors (indices along all current contours) and their window costs."""
-    p_window, p_row = _window_index(previous_bounds, pairs, half)
-    q_window, q_row = _window_index(current_bounds, pairs, half)
     n, m = np.diff(previous_bounds)[pairs], np.diff(current_bounds)[pairs]
-    p_owner = np.repeat(np.arange(len(pairs)), n)
-    q_owner = np.repeat(np.arange(len(pairs)), m)
+    p_owner, p_row = owners_of(bounds_of(n))
+    q_owner, q_row = owners_of(bounds_of(m))
+    index = previous_bounds[pairs][p_owner] + p_row  # the points, along all contours
+    q_start = current_bounds[pairs][p_owner]
+    p_windows = previous[
+        _circular_windows(previous_bounds[pairs][p_owner], p_row, n[p_owner], half)
+    ]
+    q_windows = current[_circular_windows(current_bounds[pairs][q_owner], q_row, m[q_owner], half)]
     # About each pair's first previous point, as match_exhaustive does.
     origin = previous[previous_bounds[pairs]]
-    pw = (previous[p_window] - origin[p_owner, None, :]).reshape(len(p_owner), -1)
-    qw = (current[q_window] - origin[q_owner, None, :]).reshape(len(q_owner), -1)
+    pw = (p_windows - origin[p_owner, None, :]).reshape(len(p_owner), -1)
+    qw = (q_windows - origin[q_owner, None, :]).reshape(len(q_owner), -1)
     width = pw.shape[1]
     left = np.zeros((len(pairs), int(n.max()), width))
     left[p_owner, p_row] = pw
@@ -739,12 +740,8 @@ def _exhaustive_small(
     table = np.matmul(left, right)
     table += norms
     local = table.argmin(axis=2)[p_owner, p_row]
-    index = previous_bounds[pairs][p_owner] + p_row
-    q_start = current_bounds[pairs][p_owner]
     successor[index] = q_start + local
     # The window cost of each chosen pair, computed directly (exact, for the ties
     # between previous points that name the same successor).
-    steps = np.arange(-half, half + 1)
-    window = q_start[:, None] + (local[:, None] + steps) % m[p_owner][:, None]
-    gap = previous[p_window] - current[window]
+    gap = p_windows - current[_circular_windows(q_start, local, m[p_owner], half)]
     cost[index] = np.einsum("ijk,ijk->i", gap, gap)

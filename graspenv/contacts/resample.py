@@ -7,16 +7,46 @@ counter-clockwise means counter-clockwise seen from above the table.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
+    "bounds_of",
     "orient_ccw",
     "orient_ccw_batch",
+    "owners_of",
     "resample_closed",
     "resample_closed_batch",
     "signed_area",
 ]
+
+
+def bounds_of(sizes: Sequence[int] | NDArray[np.intp]) -> NDArray[np.intp]:
+    """Where each of several arrays laid end to end starts, and the total.
+
+    The batch functions here and in :mod:`graspenv.contacts.matching` take every
+    contour of a frame as one array and these bounds: contour c is
+    ``points[bounds[c]:bounds[c + 1]]``.
+
+    Args:
+        sizes: the arrays' lengths, (C,).
+
+    Returns:
+        Shape (C + 1,): 0, then the running totals.
+    """
+    bounds = np.zeros(len(sizes) + 1, dtype=np.intp)
+    np.cumsum(sizes, out=bounds[1:])
+    return bounds
+
+
+def owners_of(bounds: NDArray[np.intp]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """For each element of arrays laid end to end (:func:`bounds_of`): which array it
+    belongs to, and its index within that array; shapes (bounds[-1],)."""
+    sizes = np.diff(bounds)
+    owner = np.repeat(np.arange(len(sizes)), sizes)
+    return owner, np.arange(bounds[-1]) - bounds[owner]
 
 
 def _as_polyline(polyline: ArrayLike, name: str = "polyline") -> NDArray[np.float64]:
@@ -191,10 +221,8 @@ def resample_closed_batch(
                 _closest_arc_positions(points, bounds, step, length, arc, starts)[has] - base[has]
             )
 
-    resampled_bounds = np.zeros(len(bounds), dtype=np.intp)
-    np.cumsum(count, out=resampled_bounds[1:])
-    which = np.repeat(np.arange(len(first)), count)
-    index = np.arange(resampled_bounds[-1]) - resampled_bounds[which]
+    resampled_bounds = bounds_of(count)
+    which, index = owners_of(resampled_bounds)
     targets = np.mod(origin[which] + (perimeter / count)[which] * index, perimeter[which])
     targets += base[which]
     # side="right" skips zero-length segments (repeated vertices): a target sitting

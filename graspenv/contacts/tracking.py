@@ -57,7 +57,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ContactConfig
-from graspenv.contacts.extract import Component, find_components, validate_mask
+from graspenv.contacts.extract import find_components_batch, validate_mask
 from graspenv.contacts.resample import orient_ccw_batch, resample_closed_batch
 from graspenv.surface.geometry import Surface
 
@@ -206,8 +206,7 @@ class ContactTracker:
                 surface's shape.
         """
         image = validate_mask(mask, self.surface.shape)
-        components = find_components(image, self.config.min_area)
-        blobs = self._blobs(components)
+        blobs, outlines, bounds = self._blobs(image)
         keeps, sources = self._match(self._previous, blobs)
 
         by_id = {c.id: c for c in self._previous}
@@ -220,9 +219,6 @@ class ContactTracker:
                 starts[i] = before.contour[0] + (blobs[i].centroid - before.centroid)
         contours: list[NDArray[np.float64]] = []
         if blobs:
-            outlines = np.concatenate([b.outline for b in blobs])
-            bounds = np.zeros(len(blobs) + 1, dtype=np.intp)
-            np.cumsum([len(b.outline) for b in blobs], out=bounds[1:])
             resampled, cuts = resample_closed_batch(outlines, bounds, self._spacing, starts)
             contours = [resampled[cuts[i] : cuts[i + 1]] for i in range(len(blobs))]
         contacts: list[Contact] = []
@@ -252,24 +248,30 @@ class ContactTracker:
         self._index += 1
         return frame
 
-    def _blobs(self, components: list[Component]) -> list[_Blob]:
-        """The components in world units, outlines counter-clockwise (one transform
-        for every outline and centroid of the frame)."""
+    def _blobs(
+        self, image: NDArray[np.uint8]
+    ) -> tuple[list[_Blob], NDArray[np.float64], NDArray[np.intp]]:
+        """The mask's components in world units, outlines counter-clockwise: one
+        transform for every outline and centroid of the frame.
+
+        Returns:
+            (blobs, outlines, bounds): the blobs, whose outlines are views of
+            ``outlines`` (all of them one after another, metres, world frame), blob i's
+            being ``outlines[bounds[i]:bounds[i + 1]]``.
+        """
+        components, pixels, bounds = find_components_batch(image, self.config.min_area)
         if not components:
-            return []
-        sizes = [len(c.outline) for c in components]
-        pixels = np.concatenate(
-            [c.outline for c in components] + [c.centroid[None] for c in components]
+            return [], np.zeros((0, 2)), bounds
+        total = len(pixels)
+        world = self.surface.pixel_to_world(
+            np.concatenate([pixels, [c.centroid for c in components]])
         )
-        world = self.surface.pixel_to_world(pixels)
-        total = sum(sizes)
-        bounds = np.zeros(len(components) + 1, dtype=np.intp)
-        np.cumsum(sizes, out=bounds[1:])
         outlines = orient_ccw_batch(world[:total], bounds)
-        return [
+        blobs = [
             _Blob(outlines[bounds[i] : bounds[i + 1]], world[total + i], c.area * self._pixel_area)
             for i, c in enumerate(components)
         ]
+        return blobs, outlines, bounds
 
     def _match(
         self, previous: tuple[Contact, ...], blobs: list[_Blob]

@@ -49,7 +49,7 @@ from numpy.typing import NDArray
 
 from graspenv.config import ContactConfig, ProxyConfig
 from graspenv.contacts.matching import correspond_batch
-from graspenv.contacts.resample import resample_closed_batch
+from graspenv.contacts.resample import bounds_of, owners_of, resample_closed_batch
 from graspenv.contacts.tracking import Contact, ContactFrame
 from graspenv.geometry import rotate
 from graspenv.physics.world import PhysicsWorld
@@ -76,13 +76,6 @@ class _Track:
     centroid: NDArray[np.float64]
     travel: float = 0.0
     born: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
-
-
-def _bounds(sizes: list[int]) -> NDArray[np.intp]:
-    """Where each of several arrays laid end to end starts, and the total: (C + 1,)."""
-    bounds = np.zeros(len(sizes) + 1, dtype=np.intp)
-    np.cumsum(sizes, out=bounds[1:])
-    return bounds
 
 
 class PersistentProxies:
@@ -209,7 +202,7 @@ class PersistentProxies:
         proxy, layers = self._proxy, self._layers
         before = [track for track, _ in pairs]
         contacts = [contact for _, contact in pairs]
-        previous_bounds = _bounds([len(t.points) for t in before])
+        previous_bounds = bounds_of([len(t.points) for t in before])
         points = np.concatenate([t.points for t in before])
         centroid_before = np.array([t.centroid for t in before])
         centroid_after = np.array([c.centroid for c in contacts])
@@ -225,13 +218,13 @@ class PersistentProxies:
             outlines = np.concatenate([c.outline for c in contacts])
             current, current_bounds = resample_closed_batch(
                 outlines,
-                _bounds([len(c.outline) for c in contacts]),
+                bounds_of([len(c.outline) for c in contacts]),
                 self._spacing,
                 predicted[previous_bounds[:-1]],
             )
         else:
             current = np.concatenate([c.contour for c in contacts])
-            current_bounds = _bounds([len(c.contour) for c in contacts])
+            current_bounds = bounds_of([len(c.contour) for c in contacts])
         match = correspond_batch(
             predicted,
             previous_bounds,
@@ -273,7 +266,7 @@ class PersistentProxies:
                 born[lost] = True
         # The farthest any point of a contact moved: its centroid's step plus the
         # turn's arc at its farthest point.
-        owner = np.repeat(np.arange(len(contacts)), np.diff(current_bounds))
+        owner, _ = owners_of(current_bounds)
         offset = current - centroid_after[owner]
         reach = np.maximum.reduceat(np.hypot(offset[:, 0], offset[:, 1]), current_bounds[:-1])
         step = centroid_after - centroid_before

@@ -195,8 +195,6 @@ class ParticlePool:
             ids: particle ids, shape (n,); releasing a parked particle is an error.
         """
         ids = self._check(ids)
-        if ids.size == 0:
-            return
         self._active[ids] = False
         self._park(ids)
 
@@ -213,8 +211,6 @@ class ParticlePool:
                 on a surface of height h is at z = h + radius.
         """
         ids = self._check(ids)
-        if ids.size == 0:
-            return
         xyz = np.asarray(xyz, dtype=float).reshape(ids.size, 3)
         c = self._client
         for body, position in zip(self._bodies[ids].tolist(), xyz.tolist(), strict=True):

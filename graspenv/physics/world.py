@@ -783,48 +783,41 @@ class PhysicsWorld:
         for i in np.flatnonzero(~known).tolist():
             v[i] = pb.getBaseVelocity(bodies[i], client)[0]
         is_bottom = ~is_upper
-        all_bottom = layers == 1
         rest_z = np.zeros(0)  # set from the first sub-step's positions
         x = read_positions()
         for s in range(1, substeps + 1):
-            bottom_x = x if all_bottom else x[is_bottom]
             if s == 1:
                 # Where each bottom particle should rest: on the surface under it
                 # (rays from the particle down ignore whatever is above it). One at
                 # table level cannot be above its support and needs no ray.
-                rest_z = np.full(len(bottom_x), self.pool.radius)
-                raised = bottom_x[:, 2] > self.pool.radius + _REST_TOLERANCE
-                if raised.any():
-                    rest_z[raised] += self._support_heights(bottom_x[raised])
+                bottom_z = x[is_bottom, 2]
+                rest_z = np.full(bottom_z.shape, self.pool.radius)
+                raised = bottom_z > self.pool.radius + _REST_TOLERANCE
+                if np.any(raised):
+                    rest_z[raised] += self._support_heights(x[is_bottom][raised])
             target = start + (s / substeps) * step_xy
             v_star = feed_forward + (target - x[:, :2]) / tau
             speed = np.hypot(v_star[:, 0], v_star[:, 1])
             too_fast = speed > v_max
-            if too_fast.any():
+            if np.any(too_fast):
                 v_star[too_fast] *= (v_max / speed[too_fast])[:, None]
-            new_v = v.copy()
-            dv = new_v[:, :2]  # a view: the planar change is written in place
-            np.subtract(v_star, dv, out=dv)
-            dv *= gain
+            dv = gain * (v_star - v[:, :2])
             magnitude = np.hypot(dv[:, 0], dv[:, 1])
             too_strong = magnitude > dv_max
-            if too_strong.any():
+            if np.any(too_strong):
                 dv[too_strong] *= (dv_max / magnitude[too_strong])[:, None]
-            dv += v[:, :2]
+            new_v = v.copy()
+            new_v[:, :2] += dv
             new_v[:, 2] += press_dv
             # Friction cannot hold a bottom particle down (it is planar), and a
             # squeezed face tilted by a degree pushes it up harder than the press:
             # a bottom particle that rose above its support is pulled back by the
             # same law, so it cannot be squirted up a face or wedged under an edge.
-            excess = bottom_x[:, 2] - rest_z - _REST_TOLERANCE
-            rising = excess > 0
-            if rising.any():
-                vz = v[:, 2] if all_bottom else v[is_bottom, 2]
-                pull = np.clip(gain * (-excess / tau - vz), -dv_max, 0.0)
-                if all_bottom:
-                    new_v[rising, 2] += pull[rising]
-                else:
-                    new_v[is_bottom, 2] += np.where(rising, pull, 0.0)
+            excess = x[is_bottom, 2] - rest_z - _REST_TOLERANCE
+            if np.any(excess > 0):
+                vz = v[is_bottom, 2]
+                pull = np.clip(gain * (-np.maximum(excess, 0.0) / tau - vz), -dv_max, 0.0)
+                new_v[is_bottom, 2] += np.where(excess > 0, pull, 0.0)
             if layers > 1:
                 z_goal = x[bottom_row, 2] + rise
                 upper_z, upper_vz = x[is_upper, 2], v[is_upper, 2]

@@ -173,7 +173,9 @@ class PersistentProxies:
         if self._cull or self._proxy.penetration_limit:
             owner, depth = self._world.footprint_depth(targets)
         if self._cull:
-            travel = np.concatenate([np.full(len(t.points), t.travel) for t in tracks.values()])
+            travel = np.repeat(
+                [t.travel for t in tracks.values()], [len(t.points) for t in tracks.values()]
+            )
             self._cull_far(particles, targets, depth, travel, born)
             start = 0
             for track in tracks.values():  # the tracks keep the culling's changes
@@ -316,16 +318,8 @@ class PersistentProxies:
             born: which points got their particle this frame, (K,); updated.
         """
         world, margin = self._world, self._proxy.cull_margin
-        object_step = (
-            max(
-                (
-                    float(np.hypot(*world.object_velocity(name)[0][:2]))
-                    for name in world.object_names
-                ),
-                default=0.0,
-            )
-            * self._dt
-        )
+        speeds = [np.hypot(*world.object_velocity(name)[0][:2]) for name in world.object_names]
+        object_step = float(max(speeds, default=0.0)) * self._dt
         reach = world.pool.radius + margin + 2.0 * travel + object_step
         bodiless = particles[:, 0] < 0
         near = np.flatnonzero(bodiless & (depth > -reach))

@@ -101,18 +101,14 @@ class ContactConfig:
         if self.min_area < 0:
             raise ConfigError(f"contacts.min_area must be >= 0, got {self.min_area}")
 
-    def resolved(self, particle_radius: float = DEFAULT_PARTICLE_RADIUS) -> ContactConfig:
-        """This configuration with an ``"auto"`` spacing made one particle diameter."""
-        if self.spacing != "auto":
-            return self
-        return dataclasses.replace(self, spacing=2.0 * particle_radius)
+    def contour_spacing(self, particle_radius: float = DEFAULT_PARTICLE_RADIUS) -> float:
+        """The spacing in metres: ``spacing``, or one diameter of particles of this
+        radius (metres) for ``"auto"``."""
+        return 2.0 * particle_radius if isinstance(self.spacing, str) else self.spacing
 
-    @property
-    def contour_spacing(self) -> float:
-        """The spacing in metres (``"auto"`` from the default particle radius)."""
-        spacing = self.resolved().spacing
-        assert spacing != "auto"
-        return spacing
+    def resolved(self, particle_radius: float = DEFAULT_PARTICLE_RADIUS) -> ContactConfig:
+        """This configuration with the spacing in metres (:meth:`contour_spacing`)."""
+        return dataclasses.replace(self, spacing=self.contour_spacing(particle_radius))
 
 
 @dataclass(frozen=True)

@@ -353,12 +353,9 @@ def _five_finger_hand(hand: Hand, prefix: str, centre: tuple[float, float], half
 
 def two_hands(base: SceneConfig, offset: Offset = (0.0, 0.0), replays: int = 1) -> Played:
     """Ten fingertips: each hand squeezes its own box and carries it 8 cm."""
-    ox, oy = offset
-    left = ObjectConfig(
-        name="left", shape="box", size=(0.06, 0.06, 0.03), mass=0.2, position=(ox - 0.1, oy)
-    )
-    right = ObjectConfig(
-        name="right", shape="box", size=(0.06, 0.06, 0.03), mass=0.2, position=(ox + 0.1, oy)
+    left, right = (
+        _shifted(replace(BOX, name=name, position=(x, 0.0)), offset)
+        for name, x in (("left", -0.1), ("right", 0.1))
     )
     hand = Hand()
     _five_finger_hand(hand, "l", left.position, 0.03)
@@ -394,9 +391,10 @@ def two_hands(base: SceneConfig, offset: Offset = (0.0, 0.0), replays: int = 1) 
         ("carry", "hold"),
         replays=replays,
     )
+    # The left box is carried 8 cm along +y, the right one along -y.
     errors = [
-        math.hypot(played.final["left"][0] - ox + 0.1, played.final["left"][1] - oy - 0.08),
-        math.hypot(played.final["right"][0] - ox - 0.1, played.final["right"][1] - oy + 0.08),
+        math.hypot(*(played.final[box.name][:2] - (box.position[0], box.position[1] + carry_y)))
+        for box, carry_y in ((left, 0.08), (right, -0.08))
     ]
     played.errors["travel_error_mm"] = 1000 * max(errors)
     return played

@@ -179,7 +179,7 @@ class ContactTracker:
     def __init__(self, surface: Surface, config: ContactConfig | None = None) -> None:
         self.surface = surface
         self.config = (config if config is not None else ContactConfig()).resolved()
-        self._spacing = self.config.contour_spacing
+        self._spacing = self.config.contour_spacing()
         self._pixel_area = float(np.prod(surface.pixel_size))
         self._previous: tuple[Contact, ...] = ()
         self._next_id = 0

@@ -24,9 +24,8 @@ def make_proxies(world: PhysicsWorld, scene: SceneConfig, surface: Surface) -> P
     """The proxy method ``scene.proxy.method`` names, bound to a world."""
     method = scene.proxy.method
     if method == "persistent":
-        return PersistentProxies(
-            world, scene.proxy, scene.contact_settings, surface.dt, scene.stack_layers
-        )
+        spacing = scene.contacts.contour_spacing(scene.proxy.particle_radius)
+        return PersistentProxies(world, scene.proxy, spacing, surface.dt, scene.stack_layers)
     if method == "instant":
         return InstantProxies(world, scene.proxy, surface)
     return RigidProxies(world, scene.proxy)

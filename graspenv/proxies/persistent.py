@@ -47,7 +47,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.config import ContactConfig, ProxyConfig
+from graspenv.config import ProxyConfig
 from graspenv.contacts.matching import correspond_batch
 from graspenv.contacts.resample import bounds_of, owners_of, resample_closed_batch
 from graspenv.contacts.tracking import Contact, ContactFrame
@@ -84,7 +84,7 @@ class PersistentProxies:
     Args:
         world: the physics world whose particle pool and ray casts are used.
         proxy: particle and matching settings.
-        contacts: contour spacing (metres) for resampling continuing contours.
+        spacing: contour spacing, metres, for resampling continuing contours.
         dt: seconds per camera frame (turns the hand's turn into a rotation rate).
         layers: particles per contour point (:attr:`SceneConfig.stack_layers`).
     """
@@ -93,13 +93,13 @@ class PersistentProxies:
         self,
         world: PhysicsWorld,
         proxy: ProxyConfig,
-        contacts: ContactConfig,
+        spacing: float,
         dt: float,
         layers: int,
     ) -> None:
         self._world = world
         self._proxy = proxy
-        self._spacing = contacts.contour_spacing
+        self._spacing = spacing
         self._dt = dt
         self._layers = layers
         self._cull = proxy.cull

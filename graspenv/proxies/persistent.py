@@ -181,18 +181,18 @@ class PersistentProxies:
             for track in tracks.values():  # the tracks keep the culling's changes
                 track.particles = particles[start : start + len(track.points)]
                 start += len(track.points)
+            # The command gets the embodied rows as arrays of its own (the tracks
+            # keep views of ``particles``).
             embodied = particles[:, 0] >= 0
             culled = int(np.count_nonzero(~embodied))
-            if culled:
-                particles, targets, spin = particles[embodied], targets[embodied], spin[embodied]
-                born = born[embodied]
-                owner, depth = owner[embodied], depth[embodied]
+            particles, targets, spin = particles[embodied], targets[embodied], spin[embodied]
+            born = born[embodied]
+            owner, depth = owner[embodied], depth[embodied]
         else:
             culled = 0
         if self._proxy.penetration_limit:
             self._limit_penetration(particles, targets, owner, depth)
-        # A copy: the tracks keep views of ``particles`` when nothing was culled.
-        return ProxyCommand(particles.copy(), targets, spin, culled=culled, born=born)
+        return ProxyCommand(particles, targets, spin, culled=culled, born=born)
 
     # -- stages ------------------------------------------------------------------------
 

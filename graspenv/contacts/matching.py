@@ -48,12 +48,12 @@ across the fingertip, on contour running the other way, because a 7-8 mm step br
 the new trailing side nearer the old leading side than the new leading side is. The
 same hand outlines resampled from the predicted start (no FFT) agree on 100 % too.
 Time with one BLAS thread (best of interleaved runs on a shared two-core machine,
-whose figures vary by a third from run to run): at 512 points fast 0.12-0.15 ms,
-exhaustive 0.56 ms (4-5×; 3-3.8× from arbitrary start points, which need the FFT);
-8-9.5× at 1 024 points, 14-20× at 2 048. The fast path is a fixed sequence of about 45
-numpy calls of one to a few microseconds each, most of its time up to 512 points:
-below about 128 points the exhaustive search is the cheaper, at 256 it takes twice the
-fast one's time (``correspond(method="auto")`` searches exhaustively up to 256 × 256
+2026-12-01): at 512 points fast 0.09 ms, exhaustive 0.38 ms (4.2×; 3.1× from
+arbitrary start points, which need the FFT); 7.4× at 1 024 points, 12.6× at 2 048.
+The fast path is a fixed sequence of about 45 numpy calls of one to a few
+microseconds each (44 µs at 32 points), most of its time up to 512 points: below
+about 128 points the exhaustive search is the cheaper, at 256 it takes twice the fast
+one's time (``correspond(method="auto")`` searches exhaustively up to 256 × 256
 point pairs).
 
 **Particles** (:func:`correspond`): DESIGN's rule made one-to-one. The predecessor of
@@ -68,9 +68,9 @@ nearest current point along the contour (fewest index steps, the lower-index sid
 a tie) that has a predecessor.
 
 **Many contacts** (:func:`correspond_batch`): every contact of a frame in one call,
-each pair matched exactly as above; the small exhaustive searches run as one batched
-matrix product over the pairs padded to the largest, so ten fingertips cost about
-what one does.
+each pair matched as above; the small exhaustive searches run as one batched matrix
+product over the pairs padded to the largest, so ten fingertips take the same few
+dozen numpy calls as one.
 """
 
 from __future__ import annotations

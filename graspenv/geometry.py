@@ -1,4 +1,4 @@
-"""Small frame helpers shared by every stage (numpy only)."""
+"""Geometry shared by every stage: frames, yaw and tilt, and object footprints."""
 
 from __future__ import annotations
 
@@ -8,7 +8,16 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["rotate", "tilt_angle", "yaw_of"]
+from graspenv.jit import njit
+
+__all__ = [
+    "SHAPE_CODES",
+    "convex_hull",
+    "footprint_depths",
+    "rotate",
+    "tilt_angle",
+    "yaw_of",
+]
 
 
 def yaw_of(quaternion: Sequence[float] | NDArray[np.float64]) -> float:
@@ -38,3 +47,151 @@ def tilt_angle(quaternion: Sequence[float] | NDArray[np.float64]) -> float:
     axis_y = 2.0 * (y * z - w * x)
     axis_z = 1.0 - 2.0 * (x * x + y * y)
     return math.atan2(math.hypot(axis_x, axis_y), axis_z)
+
+
+#: Object shapes as the footprint kernel numbers them (``ObjectConfig.shape``).
+SHAPE_CODES = {"box": 0, "sphere": 1, "cylinder": 2}
+# A cylinder whose top leans less than this off its base (metres) casts the shadow of
+# its end disc: 1 µm, far below the penetration margin and the culling margin.
+_UPRIGHT_LEAN = 1e-6
+# Points on the rim of a leaning cylinder's end discs that draw its footprint.
+_RIM_POINTS = 32
+
+
+@njit
+def footprint_depths(
+    points: NDArray[np.float64],
+    shapes: NDArray[np.int64],
+    sizes: NDArray[np.float64],
+    positions: NDArray[np.float64],
+    rotations: NDArray[np.float64],
+) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """How deep each point lies inside the nearest object's footprint (its shadow on
+    the table, in the object's current pose).
+
+    A box's shadow is the Minkowski sum of its three half-axes projected on the
+    table (a zonogon: a hexagon or a rectangle): for each projected axis g_i, two of
+    its edges are parallel to g_i, at ±h_i = Σ_j |n_i · g_j| along its normal n_i, and
+    the depth is the smallest h_i − |n_i · p| over the axes that do not project to a
+    point. A sphere's is its disc; an upright cylinder's its end disc; a leaning
+    cylinder's the convex hull of its two end discs' rims.
+
+    Args:
+        points: metres, world frame, shape (N, 2).
+        shapes: :data:`SHAPE_CODES` of each object, shape (O,).
+        sizes: ``ObjectConfig.size`` of each object, padded with zeros, (O, 3).
+        positions: object centres, metres, world frame, (O, 3).
+        rotations: object rotation matrices, row-major, (O, 9).
+
+    Returns:
+        (object, depth): the index of the object holding each point deepest (the one
+        it lies least far outside of, outside every footprint; -1 without objects),
+        and that depth, metres, negative outside; shapes (N,). Outside a box the
+        depth is minus the distance beyond its farthest edge *line*, never more than
+        the true distance: a point is never nearer an object than its depth says.
+    """
+    n = len(points)
+    owner = np.full(n, -1, np.int64)
+    best = np.full(n, -np.inf)
+    for o in range(len(shapes)):
+        depth = np.empty(n)
+        r = rotations[o]
+        cx, cy = positions[o, 0], positions[o, 1]
+        if shapes[o] == 0:
+            normals = np.zeros((3, 2))
+            reach = np.zeros(3)
+            axes = np.empty((3, 2))
+            for i in range(3):
+                axes[i, 0] = r[i] * sizes[o, i] / 2
+                axes[i, 1] = r[3 + i] * sizes[o, i] / 2
+            count = 0
+            for i in range(3):
+                length = np.hypot(axes[i, 0], axes[i, 1])
+                if length <= 1e-12:  # seen end-on: no edges of its own
+                    continue
+                nx, ny = -axes[i, 1] / length, axes[i, 0] / length
+                normals[count, 0], normals[count, 1] = nx, ny
+                for j in range(3):
+                    reach[count] += abs(nx * axes[j, 0] + ny * axes[j, 1])
+                count += 1
+            for k in range(n):
+                dx, dy = points[k, 0] - cx, points[k, 1] - cy
+                value = np.inf
+                for i in range(count):
+                    value = min(value, reach[i] - abs(dx * normals[i, 0] + dy * normals[i, 1]))
+                depth[k] = value
+        elif shapes[o] == 1 or np.hypot(r[2], r[5]) * sizes[o, 1] < _UPRIGHT_LEAN:
+            radius = sizes[o, 0]
+            for k in range(n):
+                depth[k] = radius - np.hypot(points[k, 0] - cx, points[k, 1] - cy)
+        else:
+            depth[:] = _leaning_cylinder_depth(points, sizes[o, 0], sizes[o, 1], r, cx, cy)
+        for k in range(n):
+            if depth[k] > best[k]:
+                best[k] = depth[k]
+                owner[k] = o
+    return owner, best
+
+
+@njit
+def _leaning_cylinder_depth(
+    points: NDArray[np.float64],
+    radius: float,
+    height: float,
+    r: NDArray[np.float64],
+    cx: float,
+    cy: float,
+) -> NDArray[np.float64]:
+    """Depth in the shadow of a leaning cylinder: the hull of its rims, (N,)."""
+    rim = np.empty((2 * _RIM_POINTS, 2))
+    for e in range(2):
+        z = (e - 0.5) * height
+        for k in range(_RIM_POINTS):
+            angle = 2.0 * np.pi * k / _RIM_POINTS
+            x, y = radius * np.cos(angle), radius * np.sin(angle)
+            rim[e * _RIM_POINTS + k, 0] = r[0] * x + r[1] * y + r[2] * z
+            rim[e * _RIM_POINTS + k, 1] = r[3] * x + r[4] * y + r[5] * z
+    hull = convex_hull(rim)
+    depth = np.full(len(points), -np.inf)
+    if len(hull) < 3:
+        return depth
+    for k in range(len(points)):
+        px, py = points[k, 0] - cx, points[k, 1] - cy
+        value = np.inf
+        for i in range(len(hull)):
+            j = (i + 1) % len(hull)
+            ex, ey = hull[j, 0] - hull[i, 0], hull[j, 1] - hull[i, 1]
+            length = np.hypot(ex, ey)
+            # Distance from the edge line towards the inside (counter-clockwise hull).
+            value = min(value, ((px - hull[i, 0]) * -ey + (py - hull[i, 1]) * ex) / length)
+        depth[k] = value
+    return depth
+
+
+@njit
+def convex_hull(points: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Counter-clockwise convex hull of 2-D points (Andrew's monotone chain), (M, 2).
+
+    Compiled and exact in its orientation tests, for the per-frame footprints;
+    collinear points are left out.
+    """
+    # Sort by x, then y: a stable sort by x after one by y.
+    order = np.argsort(points[:, 1], kind="mergesort")
+    order = order[np.argsort(points[order, 0], kind="mergesort")]
+    n = len(points)
+    chain = np.empty((2 * n, 2))
+    size = 0
+    for sweep in range(2):
+        start = size
+        for t in range(n):
+            p = points[order[t] if sweep == 0 else order[n - 1 - t]]
+            while size >= start + 2:
+                ax, ay = chain[size - 2, 0], chain[size - 2, 1]
+                bx, by = chain[size - 1, 0], chain[size - 1, 1]
+                if (bx - ax) * (p[1] - ay) - (by - ay) * (p[0] - ax) > 1e-15:
+                    break
+                size -= 1
+            chain[size, 0], chain[size, 1] = p[0], p[1]
+            size += 1
+        size -= 1  # the last point of each half is the first of the other
+    return chain[:size].copy()

@@ -65,13 +65,18 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.contacts.resample import bounds_of
+from graspenv.jit import njit
 
 __all__ = [
     "Component",
+    "Outlines",
+    "components",
     "find_components",
     "find_components_batch",
+    "find_outlines",
     "outline_from_chain",
     "outlines_from_chains",
+    "traced_chains",
     "validate_mask",
 ]
 
@@ -151,44 +156,97 @@ def find_components(mask: NDArray[np.uint8], min_area: float = 0.0) -> list[Comp
 def find_components_batch(
     mask: NDArray[np.uint8], min_area: float = 0.0
 ) -> tuple[list[Component], NDArray[np.float64], NDArray[np.intp]]:
-    """:func:`find_components`, with the outlines also as one array (the per-frame path:
-    the next stages take every outline of the frame at once).
+    """:func:`find_components`, with the outlines also as one array.
 
     Returns:
         (components, outlines, bounds): the components; all their outlines one after
         another, pixels (column, row), shape (L, 2), of which each component's
         ``outline`` is a view; component i's is ``outlines[bounds[i]:bounds[i + 1]]``.
     """
-    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
-    found: list[tuple[int, NDArray[np.int32], float, NDArray[np.float64]]] = []
-    for contour in contours:
-        chain = np.asarray(contour, dtype=np.int32).reshape(-1, 2)
-        moments = cv2.moments(contour)
-        enclosed = abs(moments["m00"])
-        # Pick's theorem on the lattice polygon of boundary-pixel centres:
-        # pixels = interior + boundary = enclosed + boundary / 2 + 1. It stays exact
-        # where the chain doubles back (spurs, lines: enclosed = 0), because each
-        # doubled-back pixel appears twice in the chain; a lone pixel appears once.
-        area = enclosed + 0.5 * len(chain) + 1.0 if len(chain) > 1 else 1.0
-        if area < min_area:
-            continue
-        if enclosed > 0.0:
-            centroid = np.array([moments["m10"], moments["m01"]]) / moments["m00"]
-        else:
-            centroid = chain.mean(axis=0, dtype=np.float64)
-        # Suzuki's outer border starts at the component's first pixel in raster order,
-        # but take the minimum explicitly so the order never depends on that detail.
-        key = int((chain[:, 1].astype(np.int64) * mask.shape[1] + chain[:, 0]).min())
-        found.append((key, chain, float(area), centroid))
-    if not found:
-        return [], np.zeros((0, 2)), np.zeros(1, dtype=np.intp)
-    found.sort(key=lambda item: item[0])
-    outlines, bounds = outlines_from_chains([chain for _, chain, _, _ in found])
+    found = find_outlines(mask, min_area)
     components = [
-        Component(chain, outlines[bounds[i] : bounds[i + 1]], area, centroid)
-        for i, (_, chain, area, centroid) in enumerate(found)
+        Component(
+            found.chains[found.chain_bounds[i] : found.chain_bounds[i + 1]],
+            found.outlines[found.bounds[i] : found.bounds[i + 1]],
+            float(found.areas[i]),
+            found.centroids[i],
+        )
+        for i in range(len(found.areas))
     ]
-    return components, outlines, bounds
+    return components, found.outlines, found.bounds
+
+
+@dataclass(frozen=True, eq=False)
+class Outlines:
+    """Every component of a mask as arrays, in raster order of their first pixel (the
+    per-frame form of :func:`find_components`: no object per component).
+
+    Attributes:
+        chains: the traced boundary chains one after another, pixels (column, row),
+            int32, shape (K, 2); component i's is ``chains[chain_bounds[i]:
+            chain_bounds[i + 1]]``.
+        chain_bounds: shape (C + 1,).
+        outlines: the outlines one after another, pixels (column, row), shape (L, 2).
+        bounds: shape (C + 1,): component i's outline is ``outlines[bounds[i]:
+            bounds[i + 1]]``.
+        areas: pixels inside each outer boundary, shape (C,).
+        centroids: pixels (column, row), shape (C, 2).
+    """
+
+    chains: NDArray[np.int32]
+    chain_bounds: NDArray[np.intp]
+    outlines: NDArray[np.float64]
+    bounds: NDArray[np.intp]
+    areas: NDArray[np.float64]
+    centroids: NDArray[np.float64]
+
+
+def find_outlines(mask: NDArray[np.uint8], min_area: float = 0.0) -> Outlines:
+    """The components of a validated mask as arrays (:class:`Outlines`): one OpenCV
+    call, then one compiled pass for areas, centroids, order and outlines.
+
+    Args:
+        mask: uint8 image, shape (H, W), non-zero = touched (see :func:`validate_mask`).
+        min_area: components with fewer pixels than this are dropped.
+    """
+    chains, chain_bounds = traced_chains(mask)
+    return Outlines(*components(chains, chain_bounds, mask.shape[1], float(min_area)))
+
+
+def traced_chains(mask: NDArray[np.uint8]) -> tuple[NDArray[np.int32], NDArray[np.intp]]:
+    """Every outer boundary of a validated mask (one OpenCV call), laid end to end.
+
+    Returns:
+        (chains, bounds): boundary-pixel centres, pixels (column, row), int32, shape
+        (K, 2), in OpenCV's order; chain i is ``chains[bounds[i]:bounds[i + 1]]``.
+    """
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    if not contours:
+        return np.zeros((0, 2), np.int32), np.zeros(1, np.intp)
+    chains = np.concatenate(contours).reshape(-1, 2).astype(np.int32, copy=False)
+    return chains, bounds_of([len(c) for c in contours])
+
+
+@njit
+def components(
+    all_chains: NDArray[np.int32], all_bounds: NDArray[np.intp], width: int, min_area: float
+) -> tuple[
+    NDArray[np.int32],
+    NDArray[np.intp],
+    NDArray[np.float64],
+    NDArray[np.intp],
+    NDArray[np.float64],
+    NDArray[np.float64],
+]:
+    """The fields of :class:`Outlines` from traced chains (:func:`traced_chains`):
+    areas and centroids, the components of at least ``min_area`` pixels in raster
+    order of their first pixel, and their outlines."""
+    areas, centroids, keys = _measure_chains(all_chains, all_bounds, width)
+    kept = np.flatnonzero(areas >= min_area)
+    order = kept[np.argsort(keys[kept], kind="mergesort")]
+    chains, chain_bounds = _gather(all_chains, all_bounds, order)
+    outlines, bounds = _outlines(chains.astype(np.float64), chain_bounds)
+    return chains, chain_bounds, outlines, bounds, areas[order], centroids[order]
 
 
 _CAP = 0.5  # half a pixel: the footprint edge beyond the centre of an end pixel
@@ -222,11 +280,7 @@ def outline_from_chain(chain: NDArray[np.integer]) -> NDArray[np.float64]:
 def outlines_from_chains(
     chains: Sequence[NDArray[np.integer]],
 ) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
-    """:func:`outline_from_chain` for many chains in one pass.
-
-    Chains that never double back (fingertips, palms: the per-frame case) go through
-    one fixed sequence of numpy calls together; a chain with a line or spur, or a
-    single pixel, is capped on its own.
+    """:func:`outline_from_chain` for many chains in one compiled pass.
 
     Args:
         chains: boundary chains, pixels (column, row), each of shape (K_i, 2) with
@@ -237,98 +291,191 @@ def outlines_from_chains(
         shape (L, 2), and outline i is ``outlines[bounds[i]:bounds[i + 1]]``,
         shape (len(chains) + 1,).
     """
-    sizes = np.array([len(c) for c in chains], dtype=np.intp)
-    bounds = bounds_of(sizes)
-    points = np.concatenate(chains).astype(np.float64)
-    first, last = bounds[:-1], bounds[1:] - 1
-    index = np.arange(len(points))
-    after_index = index + 1
-    after_index[last] = first
-    before_index = index - 1
-    before_index[first] = last
-    before, after = points[before_index], points[after_index]
-    tangent = after - before
-    length = np.hypot(tangent[:, 0], tangent[:, 1])
+    points = np.concatenate([np.asarray(c).reshape(-1, 2) for c in chains]).astype(np.float64)
+    return _outlines(points, bounds_of([len(c) for c in chains]))
+
+
+@njit
+def _measure_chains(
+    chains: NDArray[np.int32], bounds: NDArray[np.intp], width: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """Area, centroid and raster key of every chain (module docstring).
+
+    The centroid is that of the polygon of boundary-pixel centres, with OpenCV's
+    contour moments (``cv2.moments``) computed in the same order: exact sums of
+    integers, scaled by ±1/2 and ±1/6. The key is the smallest ``row · width +
+    column`` of the chain: Suzuki's outer border starts at the component's first
+    pixel in raster order, but the minimum is taken so the order never depends on
+    that detail.
+    """
+    count = len(bounds) - 1
+    areas = np.empty(count)
+    centroids = np.empty((count, 2))
+    keys = np.empty(count, np.int64)
+    for c in range(count):
+        lo, hi = bounds[c], bounds[c + 1]
+        size = hi - lo
+        a00 = np.int64(0)
+        a10 = np.int64(0)
+        a01 = np.int64(0)
+        x_before = np.int64(chains[hi - 1, 0])
+        y_before = np.int64(chains[hi - 1, 1])
+        key = np.int64(1) << 62
+        sum_x = np.int64(0)
+        sum_y = np.int64(0)
+        for i in range(lo, hi):
+            x = np.int64(chains[i, 0])
+            y = np.int64(chains[i, 1])
+            cross = x_before * y - x * y_before
+            a00 += cross
+            a10 += cross * (x_before + x)
+            a01 += cross * (y_before + y)
+            x_before, y_before = x, y
+            key = min(key, y * width + x)
+            sum_x += x
+            sum_y += y
+        keys[c] = key
+        # Pick's theorem on the lattice polygon of boundary-pixel centres:
+        # pixels = interior + boundary = enclosed + boundary / 2 + 1. It stays exact
+        # where the chain doubles back (spurs, lines: enclosed = 0), because each
+        # doubled-back pixel appears twice in the chain; a lone pixel appears once.
+        if a00 != 0:
+            half, sixth = (0.5, 1.0 / 6.0) if a00 > 0 else (-0.5, -1.0 / 6.0)
+            enclosed = float(a00 * half)
+            centroids[c, 0] = (a10 * sixth) / enclosed
+            centroids[c, 1] = (a01 * sixth) / enclosed
+        else:
+            enclosed = 0.0
+            centroids[c, 0] = sum_x / size
+            centroids[c, 1] = sum_y / size
+        areas[c] = enclosed + 0.5 * size + 1.0 if size > 1 else 1.0
+    return areas, centroids, keys
+
+
+@njit
+def _gather(
+    chains: NDArray[np.int32], bounds: NDArray[np.intp], order: NDArray[np.intp]
+) -> tuple[NDArray[np.int32], NDArray[np.intp]]:
+    """The chains ``order`` names, in that order, laid end to end."""
+    sizes = np.empty(len(order), np.intp)
+    for k in range(len(order)):
+        sizes[k] = bounds[order[k] + 1] - bounds[order[k]]
+    out_bounds = np.zeros(len(order) + 1, np.intp)
+    out_bounds[1:] = np.cumsum(sizes)
+    out = np.empty((out_bounds[-1], 2), np.int32)
+    for k in range(len(order)):
+        lo = bounds[order[k]]
+        for i in range(sizes[k]):
+            out[out_bounds[k] + i, 0] = chains[lo + i, 0]
+            out[out_bounds[k] + i, 1] = chains[lo + i, 1]
+    return out, out_bounds
+
+
+@njit
+def _outlines(
+    points: NDArray[np.float64], bounds: NDArray[np.intp]
+) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """The outline of every chain (module docstring): offset half a pixel outward,
+    capped where it doubles back, smoothed by [-1, 4, 10, 4, -1] / 16."""
+    count = len(bounds) - 1
+    # Every point of a chain stays, and each end where it doubles back (a point
+    # whose neighbours coincide) becomes the two corners of a cap; a single pixel
+    # becomes its four corners.
+    sizes = np.empty(count, np.intp)
+    for c in range(count):
+        lo, hi = bounds[c], bounds[c + 1]
+        size = hi - lo
+        if size == 1:
+            sizes[c] = 4
+            continue
+        tips = 0
+        for i in range(size):
+            before = lo + (i - 1) % size
+            after = lo + (i + 1) % size
+            if points[before, 0] == points[after, 0] and points[before, 1] == points[after, 1]:
+                tips += 1
+        sizes[c] = size + tips
+    out_bounds = np.zeros(count + 1, np.intp)
+    out_bounds[1:] = np.cumsum(sizes)
+    outlines = np.empty((out_bounds[-1], 2))
+    fixed = np.zeros(out_bounds[-1], np.bool_)
+    for c in range(count):
+        _outline_of(points, bounds[c], bounds[c + 1], outlines, fixed, out_bounds[c])
+    smoothed = np.empty_like(outlines)
+    for c in range(count):
+        lo, hi = out_bounds[c], out_bounds[c + 1]
+        size = hi - lo
+        for i in range(lo, hi):
+            if size < _SMOOTH_FROM or fixed[i]:
+                smoothed[i, 0] = outlines[i, 0]
+                smoothed[i, 1] = outlines[i, 1]
+                continue
+            k = i - lo
+            b1, a1 = lo + (k - 1) % size, lo + (k + 1) % size
+            b2, a2 = lo + (k - 2) % size, lo + (k + 2) % size
+            for d in range(2):
+                near = outlines[b1, d] + outlines[a1, d]
+                far = outlines[b2, d] + outlines[a2, d]
+                smoothed[i, d] = (10.0 * outlines[i, d] + 4.0 * near - far) / 16.0
+    return smoothed, out_bounds
+
+
+@njit
+def _outline_of(
+    points: NDArray[np.float64],
+    lo: int,
+    hi: int,
+    outlines: NDArray[np.float64],
+    fixed: NDArray[np.bool_],
+    start: int,
+) -> None:
+    """One chain's offset outline (not yet smoothed) into ``outlines[start:]``;
+    ``fixed`` marks the corners of caps, which smoothing must keep."""
+    size = hi - lo
+    if size == 1:
+        corners = ((-1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (1.0, -1.0))
+        for k in range(4):
+            outlines[start + k, 0] = points[lo, 0] + _CAP * corners[k][0]
+            outlines[start + k, 1] = points[lo, 1] + _CAP * corners[k][1]
+        return
     # OpenCV's outer borders have a negative shoelace area in (column, row), for
     # which (-dy, dx) of the tangent points out of the shape. Check rather than
     # trust it; a chain enclosing nothing has no inside, and either side will do.
-    cross = points[:, 0] * after[:, 1] - points[:, 1] * after[:, 0]
-    outward = np.where(np.add.reduceat(cross, first) <= 0.0, 1.0, -1.0)
-    tip = length == 0.0  # the chain doubles back here: the end of a line or spur
-    capped = np.add.reduceat(tip, first) > 0
-    if capped.any():
-        # The capped ones one by one, the others together again, in the chains' order.
-        plain = np.flatnonzero(~capped).tolist()
-        pieces: list[NDArray[np.float64]] = [np.zeros((0, 2))] * len(chains)
-        if plain:
-            together, cuts = outlines_from_chains([chains[i] for i in plain])
-            for k, i in enumerate(plain):
-                pieces[i] = together[cuts[k] : cuts[k + 1]]
-        for i in np.flatnonzero(capped).tolist():
-            pieces[i] = _capped_outline(points[bounds[i] : bounds[i + 1]], outward[i])
-        return np.concatenate(pieces), bounds_of([len(p) for p in pieces])
-    side = np.repeat(outward, sizes)
-    outline = _offset_outward(points, tangent, length, side)
-    # The pixel staircase is 5 % longer than the edge it follows and spaces resampled
-    # points unevenly. [1, 2, 1]/4 removes the zigzag but shrinks curves; following
-    # it by [-1, 6, -1]/4 restores them to fourth order: together [-1, 4, 10, 4, -1]
-    # / 16. Outlines of fewer than _SMOOTH_FROM points are left as they are.
-    smoothed = np.repeat(sizes >= _SMOOTH_FROM, sizes)
-    if not smoothed.any():
-        return outline, bounds
-    neighbours = outline[before_index] + outline[after_index]
-    far = outline[before_index[before_index]] + outline[after_index[after_index]]
-    smooth = (10.0 * outline + 4.0 * neighbours - far) / 16.0
-    if smoothed.all():
-        return smooth, bounds
-    return np.where(smoothed[:, None], smooth, outline), bounds
-
-
-def _offset_outward(
-    points: NDArray[np.float64],
-    tangent: NDArray[np.float64],
-    length: NDArray[np.float64],
-    side: NDArray[np.float64],
-) -> NDArray[np.float64]:
-    """Points moved half a pixel along the dominant axis of their outward normal:
-    0.5·max(|n_x|, |n_y|) along n, n = side · (-t_y, t_x) / |t| (lengths > 0)."""
-    normal = np.empty_like(tangent)
-    normal[:, 0] = -side * tangent[:, 1] / length
-    normal[:, 1] = side * tangent[:, 0] / length
-    offset = 0.5 * np.abs(normal).max(axis=1, keepdims=True)
-    return points + offset * normal
-
-
-def _capped_outline(points: NDArray[np.float64], outward: float) -> NDArray[np.float64]:
-    """The outline of one chain that doubles back (or is a single pixel): offset as
-    everywhere, with a square cap half a pixel beyond each end, then smoothed except
-    at the caps' corners (so thin lines keep their footprint)."""
-    if len(points) == 1:
-        corners = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, 1.0], [1.0, -1.0]])
-        return points[0] + _CAP * corners
-    ring = np.concatenate([points[-1:], points, points[:1]])
-    before, after = ring[:-2], ring[2:]
-    tangent = after - before
-    length = np.hypot(tangent[:, 0], tangent[:, 1])
-    tip = length == 0.0
-    length[tip] = 1.0
-    outline = _offset_outward(points, tangent, length, np.full(len(points), outward))
-    pieces: list[NDArray[np.float64]] = []
-    start = 0
-    for end in np.flatnonzero(tip).tolist():
-        arrive = points[end] - before[end]
-        arrive /= np.hypot(arrive[0], arrive[1])
-        side = outward * np.array([-arrive[1], arrive[0]])
-        pieces.append(outline[start:end])
-        # Two corners of a square cap, in the chain's order: first on the side the
-        # chain arrives along, then on the side it leaves along.
-        pieces.append(points[end] + _CAP * np.stack([arrive + side, arrive - side]))
-        start = end + 1
-    pieces.append(outline[start:])
-    outline = np.concatenate(pieces)
-    fixed = np.concatenate([np.full(len(piece), i % 2 == 1) for i, piece in enumerate(pieces)])
-    if len(outline) < _SMOOTH_FROM:
-        return outline
-    ext = np.concatenate([outline[-2:], outline, outline[:2]])
-    smooth = (10.0 * outline + 4.0 * (ext[1:-3] + ext[3:-1]) - (ext[:-4] + ext[4:])) / 16.0
-    return np.where(fixed[:, None], outline, smooth)
+    cross = 0.0
+    for i in range(size):
+        j = lo + (i + 1) % size
+        cross += points[lo + i, 0] * points[j, 1] - points[lo + i, 1] * points[j, 0]
+    outward = 1.0 if cross <= 0.0 else -1.0
+    out = start
+    for i in range(size):
+        here = lo + i
+        before = lo + (i - 1) % size
+        after = lo + (i + 1) % size
+        tx = points[after, 0] - points[before, 0]
+        ty = points[after, 1] - points[before, 1]
+        length = np.hypot(tx, ty)
+        if length == 0.0:
+            # The chain doubles back here (the end of a line or spur): two corners
+            # of a square cap, first on the side it arrives along, then on the side
+            # it leaves along.
+            ax = points[here, 0] - points[before, 0]
+            ay = points[here, 1] - points[before, 1]
+            norm = np.hypot(ax, ay)
+            ax /= norm
+            ay /= norm
+            sx, sy = -outward * ay, outward * ax
+            outlines[out, 0] = points[here, 0] + _CAP * (ax + sx)
+            outlines[out, 1] = points[here, 1] + _CAP * (ay + sy)
+            outlines[out + 1, 0] = points[here, 0] + _CAP * (ax - sx)
+            outlines[out + 1, 1] = points[here, 1] + _CAP * (ay - sy)
+            fixed[out] = True
+            fixed[out + 1] = True
+            out += 2
+            continue
+        # Half a pixel along the dominant axis of the outward normal n.
+        nx = -outward * ty / length
+        ny = outward * tx / length
+        offset = 0.5 * max(abs(nx), abs(ny))
+        outlines[out, 0] = points[here, 0] + offset * nx
+        outlines[out, 1] = points[here, 1] + offset * ny
+        out += 1

@@ -82,7 +82,7 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from graspenv.contacts.resample import bounds_of, owners_of
+from graspenv.jit import njit
 
 __all__ = [
     "Correspondence",
@@ -113,9 +113,9 @@ _NEAR_SHIFTS = 8
 _ALIGNED_COSINE = 0.98
 # Most table entries (points × diagonals) the fast matcher builds at once.
 _TABLE_SIZE = 1 << 14
-# correspond_batch searches contour pairs of at most this many point pairs in one
-# batched product (padded to the largest of them).
-_BATCH_PAIRS = 96 * 96
+# correspond_batch searches contour pairs of at most this many point pairs with the
+# compiled direct search, larger ones with match_exhaustive's blocked product.
+_DIRECT_PAIRS = 96 * 96
 
 
 def _contour(points: ArrayLike, name: str) -> FloatArray:
@@ -536,29 +536,42 @@ def new_point_anchors(has_predecessor: ArrayLike) -> IntArray:
     return _anchors(has, np.array([0, len(has)], dtype=np.intp))
 
 
+@njit
 def _anchors(has: NDArray[np.bool_], bounds: IntArray) -> IntArray:
     """:func:`new_point_anchors` of many contours at once (contour c is
     ``has[bounds[c]:bounds[c + 1]]``); indices along all of them."""
-    anchor = np.full(len(has), -1, dtype=np.intp)
-    kept = np.flatnonzero(has)
-    lone = np.flatnonzero(~has)
-    if kept.size == 0 or lone.size == 0:
-        return anchor
-    sizes = np.diff(bounds)
-    owner = np.repeat(np.arange(len(sizes)), sizes)[lone]
-    # Each contour's kept points are kept[low[c]:high[c]].
-    low = np.searchsorted(kept, bounds[:-1])[owner]
-    high = np.searchsorted(kept, bounds[1:])[owner]
-    some = high > low  # a contour with no kept point leaves its lone points at -1
-    if not some.all():
-        lone, owner, low, high = lone[some], owner[some], low[some], high[some]
-    after = np.searchsorted(kept, lone)  # first kept point above each lone point
-    ahead = kept[np.where(after < high, after, low)]  # wrapping round the contour
-    behind = kept[np.where(after > low, after - 1, high - 1)]
-    size = sizes[owner]
-    forward = (ahead - lone) % size
-    backward = (lone - behind) % size
-    anchor[lone] = np.where(backward <= forward, behind, ahead)
+    anchor = np.full(len(has), -1, np.intp)
+    for c in range(len(bounds) - 1):
+        lo, hi = bounds[c], bounds[c + 1]
+        size = hi - lo
+        last = -1  # the last point with a predecessor, walking forward
+        for i in range(size):
+            if has[lo + i]:
+                last = i
+        if last < 0:
+            continue  # nothing kept: every point stays at -1
+        first = 0  # the first point with a predecessor
+        while not has[lo + first]:
+            first += 1
+        # Steps back to the nearest kept point walking forward, and steps ahead to it
+        # walking backward, each starting from the kept point across the wrap.
+        behind = np.empty(size, np.intp)
+        steps = size - last - 1
+        for i in range(size):
+            steps = 0 if has[lo + i] else steps + 1
+            behind[i] = steps
+        ahead = np.empty(size, np.intp)
+        steps = first
+        for i in range(size - 1, -1, -1):
+            steps = 0 if has[lo + i] else steps + 1
+            ahead[i] = steps
+        for i in range(size):
+            if has[lo + i]:
+                continue
+            if behind[i] <= ahead[i]:
+                anchor[lo + i] = lo + (i - behind[i]) % size
+            else:
+                anchor[lo + i] = lo + (i + ahead[i]) % size
     return anchor
 
 
@@ -670,14 +683,21 @@ def correspond_batch(
         raise ValueError(f"search must be >= 0, got {search}")
     successor = np.empty(len(previous), dtype=np.intp)
     cost = np.empty(len(previous))
-    # Small exhaustive searches together; large ones and fast ones pair by pair.
-    batched = exhaustive & (n * m <= _BATCH_PAIRS)
-    if batched.any():
-        pairs = np.flatnonzero(batched)
-        _exhaustive_small(
-            previous, previous_bounds, current, current_bounds, pairs, half, successor, cost
+    # Small exhaustive searches in one compiled call; large ones and fast ones pair
+    # by pair.
+    small = exhaustive & (n * m <= _DIRECT_PAIRS)
+    if small.any():
+        _exhaustive_direct(
+            np.ascontiguousarray(previous, dtype=np.float64),
+            np.asarray(previous_bounds, dtype=np.intp),
+            np.ascontiguousarray(current, dtype=np.float64),
+            np.asarray(current_bounds, dtype=np.intp),
+            small,
+            half,
+            successor,
+            cost,
         )
-    for c in np.flatnonzero(~batched).tolist():
+    for c in np.flatnonzero(~small).tolist():
         lo, hi = previous_bounds[c], previous_bounds[c + 1]
         p = previous[lo:hi]
         q = current[current_bounds[c] : current_bounds[c + 1]]
@@ -687,61 +707,74 @@ def correspond_batch(
         else:
             local, cost[lo:hi] = _match_fast(_complex(p), _complex(q), half, int(search))
         successor[lo:hi] = local + current_bounds[c]
-    # Among the previous points naming the same successor, the cheapest (then the
-    # lowest index: lexsort is stable) comes first; it is that current point's
-    # predecessor.
-    order = np.lexsort((cost, successor))
-    first = np.ones(len(order), dtype=bool)
-    first[1:] = successor[order[1:]] != successor[order[:-1]]
-    predecessor = np.full(len(current), -1, dtype=np.intp)
-    predecessor[successor[order[first]]] = order[first]
-    kept = predecessor[successor] == np.arange(len(previous))
-    anchor = _anchors(predecessor >= 0, current_bounds)
+    predecessor, kept, anchor = _particles(
+        successor, cost, np.asarray(current_bounds, dtype=np.intp)
+    )
     for array in (successor, cost, predecessor, kept, anchor):
         array.setflags(write=False)
     return Correspondence(successor, cost, predecessor, kept, anchor)
 
 
-def _exhaustive_small(
-    previous: NDArray[np.float64],
+@njit
+def _exhaustive_direct(
+    previous: FloatArray,
     previous_bounds: IntArray,
-    current: NDArray[np.float64],
+    current: FloatArray,
     current_bounds: IntArray,
-    pairs: IntArray,
+    pairs: NDArray[np.bool_],
     half: int,
     successor: IntArray,
     cost: FloatArray,
 ) -> None:
-    """The exhaustive search of each contour pair in ``pairs`` (small ones), as one
-    batched matrix product over the pairs padded to the largest; writes the
-    successors (indices along all current contours) and their window costs."""
-    n, m = np.diff(previous_bounds)[pairs], np.diff(current_bounds)[pairs]
-    p_owner, p_row = owners_of(bounds_of(n))
-    q_owner, q_row = owners_of(bounds_of(m))
-    index = previous_bounds[pairs][p_owner] + p_row  # the points, along all contours
-    q_start = current_bounds[pairs][p_owner]
-    p_windows = previous[
-        _circular_windows(previous_bounds[pairs][p_owner], p_row, n[p_owner], half)
-    ]
-    q_windows = current[_circular_windows(current_bounds[pairs][q_owner], q_row, m[q_owner], half)]
-    # About each pair's first previous point, as match_exhaustive does.
-    origin = previous[previous_bounds[pairs]]
-    pw = (p_windows - origin[p_owner, None, :]).reshape(len(p_owner), -1)
-    qw = (q_windows - origin[q_owner, None, :]).reshape(len(q_owner), -1)
-    width = pw.shape[1]
-    left = np.zeros((len(pairs), int(n.max()), width))
-    left[p_owner, p_row] = pw
-    right = np.zeros((len(pairs), width, int(m.max())))
-    right[q_owner, :, q_row] = -2.0 * qw
-    # D = ||a||² + ||b||² - 2 a·b; ||a||² is the same along a row, so it is left out
-    # of the argmin; padded columns can never win.
-    norms = np.full((len(pairs), 1, right.shape[2]), np.inf)
-    norms[q_owner, 0, q_row] = np.einsum("ij,ij->i", qw, qw)
-    table = np.matmul(left, right)
-    table += norms
-    local = table.argmin(axis=2)[p_owner, p_row]
-    successor[index] = q_start + local
-    # The window cost of each chosen pair, computed directly (exact, for the ties
-    # between previous points that name the same successor).
-    gap = p_windows - current[_circular_windows(q_start, local, m[p_owner], half)]
-    cost[index] = np.einsum("ijk,ijk->i", gap, gap)
+    """The exhaustive search of each contour pair c with ``pairs[c]``: every window
+    cost D[k, j] summed directly (exact, so the smallest j wins every tie); writes
+    the successors (indices along all current contours) and their costs."""
+    width = 2 * (2 * half + 1)
+    for c in range(len(pairs)):
+        if not pairs[c]:
+            continue
+        p_lo, q_lo = previous_bounds[c], current_bounds[c]
+        n, m = previous_bounds[c + 1] - p_lo, current_bounds[c + 1] - q_lo
+        # Each point's window as one flat vector: the inner loop then runs without
+        # index arithmetic.
+        p_windows = np.empty((n, width))
+        q_windows = np.empty((m, width))
+        for i in range(-half, half + 1):
+            column = 2 * (i + half)
+            for k in range(n):
+                a = p_lo + (k + i) % n
+                p_windows[k, column] = previous[a, 0]
+                p_windows[k, column + 1] = previous[a, 1]
+            for j in range(m):
+                b = q_lo + (j + i) % m
+                q_windows[j, column] = current[b, 0]
+                q_windows[j, column + 1] = current[b, 1]
+        for k in range(n):
+            best, best_cost = 0, np.inf
+            for j in range(m):
+                total = 0.0
+                for d in range(width):
+                    gap = p_windows[k, d] - q_windows[j, d]
+                    total += gap * gap
+                if total < best_cost:
+                    best, best_cost = j, total
+            successor[p_lo + k] = q_lo + best
+            cost[p_lo + k] = best_cost
+
+
+@njit
+def _particles(
+    successor: IntArray, cost: FloatArray, current_bounds: IntArray
+) -> tuple[IntArray, NDArray[np.bool_], IntArray]:
+    """Predecessors, kept particles and anchors (module docstring) of a batch."""
+    predecessor = np.full(current_bounds[-1], -1, np.intp)
+    # Among the previous points naming the same successor the cheapest, then the
+    # lowest index, is its predecessor.
+    for k in range(len(successor)):
+        j = successor[k]
+        if predecessor[j] < 0 or cost[k] < cost[predecessor[j]]:
+            predecessor[j] = k
+    kept = np.empty(len(successor), np.bool_)
+    for k in range(len(successor)):
+        kept[k] = predecessor[successor[k]] == k
+    return predecessor, kept, _anchors(predecessor >= 0, current_bounds)

@@ -8,12 +8,18 @@ counter-clockwise means counter-clockwise seen from above the table.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from graspenv.jit import njit
+
+G = TypeVar("G", bound=np.generic)
+
 __all__ = [
     "bounds_of",
+    "gather",
     "orient_ccw",
     "orient_ccw_batch",
     "owners_of",
@@ -47,6 +53,34 @@ def owners_of(bounds: NDArray[np.intp]) -> tuple[NDArray[np.intp], NDArray[np.in
     sizes = np.diff(bounds)
     owner = np.repeat(np.arange(len(sizes)), sizes)
     return owner, np.arange(bounds[-1]) - bounds[owner]
+
+
+@njit
+def gather(
+    points: NDArray[G], bounds: NDArray[np.intp], order: NDArray[np.intp]
+) -> tuple[NDArray[G], NDArray[np.intp]]:
+    """Some of several arrays laid end to end (:func:`bounds_of`), in a new order.
+
+    Compiled for any dtype and row shape (one machine code per combination).
+
+    Args:
+        points: the arrays one after another, shape (T, ...).
+        bounds: array c is ``points[bounds[c]:bounds[c + 1]]``, shape (C + 1,).
+        order: which arrays to take, in order, shape (K,).
+
+    Returns:
+        (gathered, gathered_bounds): ``points[bounds[order[k]]:bounds[order[k] + 1]]``
+        for k = 0, 1, ... one after another, and their bounds, shape (K + 1,).
+    """
+    new_bounds = np.zeros(len(order) + 1, np.intp)
+    for k in range(len(order)):
+        new_bounds[k + 1] = new_bounds[k] + bounds[order[k] + 1] - bounds[order[k]]
+    rows = np.empty(new_bounds[-1], np.intp)
+    for k in range(len(order)):
+        lo = bounds[order[k]]
+        for i in range(new_bounds[k + 1] - new_bounds[k]):
+            rows[new_bounds[k] + i] = lo + i
+    return points[rows], new_bounds
 
 
 def _as_polyline(polyline: ArrayLike, name: str = "polyline") -> NDArray[np.float64]:
@@ -99,7 +133,7 @@ def orient_ccw(polyline: ArrayLike) -> NDArray[np.float64]:
 
 
 def orient_ccw_batch(points: NDArray[np.float64], bounds: NDArray[np.intp]) -> NDArray[np.float64]:
-    """:func:`orient_ccw` for many closed polylines in one pass.
+    """:func:`orient_ccw` for many closed polylines in one compiled pass.
 
     Args:
         points: the polylines one after another, shape (T, 2), right-handed frame;
@@ -111,20 +145,35 @@ def orient_ccw_batch(points: NDArray[np.float64], bounds: NDArray[np.intp]) -> N
         are unchanged; the others reversed with their first vertex kept first). The
         input itself when every polyline already runs counter-clockwise.
     """
-    first = bounds[:-1]
-    # The shoelace about each polyline's first vertex (see _shoelace).
-    rel = points - np.repeat(points[first], np.diff(bounds), axis=0)
-    following = np.arange(1, len(points) + 1)
-    following[bounds[1:] - 1] = first
-    cross = rel[:, 0] * rel[following, 1] - rel[:, 1] * rel[following, 0]
-    clockwise = np.flatnonzero(np.add.reduceat(cross, first) < 0.0)
-    if clockwise.size == 0:
-        return points
-    oriented = points.copy()
-    for c in clockwise.tolist():
+    oriented, changed = orient_ccw_kernel(np.ascontiguousarray(points, dtype=np.float64), bounds)
+    return oriented if changed else points
+
+
+@njit
+def orient_ccw_kernel(
+    points: NDArray[np.float64], bounds: NDArray[np.intp]
+) -> tuple[NDArray[np.float64], bool]:
+    """:func:`orient_ccw_batch`, and whether any polyline was reversed."""
+    oriented = points
+    changed = False
+    for c in range(len(bounds) - 1):
         lo, hi = bounds[c], bounds[c + 1]
-        oriented[lo + 1 : hi] = points[lo + 1 : hi][::-1]
-    return oriented
+        # The shoelace about the first vertex (see _shoelace).
+        x0, y0 = points[lo, 0], points[lo, 1]
+        cross = 0.0
+        for i in range(lo + 1, hi - 1):
+            cross += (points[i, 0] - x0) * (points[i + 1, 1] - y0) - (points[i, 1] - y0) * (
+                points[i + 1, 0] - x0
+            )
+        if cross >= 0.0:
+            continue
+        if not changed:
+            oriented = points.copy()
+            changed = True
+        for k in range(1, hi - lo):
+            oriented[lo + k, 0] = points[hi - k, 0]
+            oriented[lo + k, 1] = points[hi - k, 1]
+    return oriented, changed
 
 
 def resample_closed(
@@ -196,65 +245,93 @@ def resample_closed_batch(
     """
     if not (np.isfinite(spacing) and spacing > 0.0):
         raise ValueError(f"spacing must be finite and > 0, got {spacing}")
-    total = len(points)
-    first, last = bounds[:-1], bounds[1:] - 1
-    following = np.arange(1, total + 1)
-    following[last] = first
-    step = points[following] - points
-    length = np.hypot(step[:, 0], step[:, 1])
-    cumulative = np.cumsum(length)
-    # Where each vertex lies along all the polylines, one after another.
-    arc = np.empty(total)
-    arc[0] = 0.0
-    arc[1:] = cumulative[:-1]
-    base = arc[first]
-    perimeter = cumulative[last] - base
-    if not (perimeter > 0.0).all():
+    if starts is None:
+        starts = np.full((len(bounds) - 1, 2), np.nan)
+    resampled, resampled_bounds = resample_kernel(
+        np.ascontiguousarray(points, dtype=np.float64),
+        np.asarray(bounds, dtype=np.intp),
+        float(spacing),
+        np.ascontiguousarray(starts, dtype=np.float64),
+    )
+    if resampled_bounds[0] < 0:
         raise ValueError("polyline has zero perimeter; it needs at least two distinct points")
-    count = np.maximum(np.rint(perimeter / spacing).astype(np.intp), 3)
-
-    origin = np.zeros(len(first))
-    if starts is not None:
-        has = ~np.isnan(starts).any(axis=1)
-        if has.any():
-            origin[has] = (
-                _closest_arc_positions(points, bounds, step, length, arc, starts)[has] - base[has]
-            )
-
-    resampled_bounds = bounds_of(count)
-    which, index = owners_of(resampled_bounds)
-    targets = np.mod(origin[which] + (perimeter / count)[which] * index, perimeter[which])
-    targets += base[which]
-    # side="right" skips zero-length segments (repeated vertices): a target sitting
-    # exactly on a vertex is taken from the segment that leaves it.
-    segment = np.minimum(np.searchsorted(arc, targets, side="right") - 1, last[which])
-    edge = length[segment]
-    fraction = (targets - arc[segment]) / np.where(edge > 0.0, edge, 1.0)
-    return points[segment] + fraction[:, None] * step[segment], resampled_bounds
+    return resampled, resampled_bounds
 
 
-def _closest_arc_positions(
+@njit
+def resample_kernel(
     points: NDArray[np.float64],
     bounds: NDArray[np.intp],
+    spacing: float,
+    starts: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """:func:`resample_closed_batch`; bounds[0] is -1 when a polyline has zero
+    perimeter (the caller raises)."""
+    count = len(bounds) - 1
+    total = len(points)
+    step = np.empty((total, 2))
+    length = np.empty(total)
+    arc = np.empty(total)  # where each vertex lies along its own polyline
+    perimeter = np.empty(count)
+    sizes = np.empty(count, np.intp)
+    for c in range(count):
+        lo, hi = bounds[c], bounds[c + 1]
+        along = 0.0
+        for i in range(lo, hi):
+            j = i + 1 if i + 1 < hi else lo
+            step[i, 0] = points[j, 0] - points[i, 0]
+            step[i, 1] = points[j, 1] - points[i, 1]
+            length[i] = np.hypot(step[i, 0], step[i, 1])
+            arc[i] = along
+            along += length[i]
+        perimeter[c] = along
+        if not along > 0.0:
+            return np.zeros((0, 2)), np.full(count + 1, -1, np.intp)
+        sizes[c] = max(int(np.rint(along / spacing)), 3)
+    out_bounds = np.zeros(count + 1, np.intp)
+    out_bounds[1:] = np.cumsum(sizes)
+    out = np.empty((out_bounds[-1], 2))
+    for c in range(count):
+        lo, hi = bounds[c], bounds[c + 1]
+        origin = 0.0
+        if not (np.isnan(starts[c, 0]) or np.isnan(starts[c, 1])):
+            origin = _closest_arc_position(points, step, length, arc, lo, hi, starts[c])
+        gap = perimeter[c] / sizes[c]
+        arcs = arc[lo:hi]
+        for k in range(sizes[c]):
+            target = (origin + gap * k) % perimeter[c]
+            # side="right" skips zero-length segments (repeated vertices): a target
+            # sitting exactly on a vertex is taken from the segment that leaves it.
+            segment = lo + min(np.searchsorted(arcs, target, side="right") - 1, hi - lo - 1)
+            edge = length[segment]
+            fraction = (target - arc[segment]) / (edge if edge > 0.0 else 1.0)
+            out[out_bounds[c] + k, 0] = points[segment, 0] + fraction * step[segment, 0]
+            out[out_bounds[c] + k, 1] = points[segment, 1] + fraction * step[segment, 1]
+    return out, out_bounds
+
+
+@njit
+def _closest_arc_position(
+    points: NDArray[np.float64],
     step: NDArray[np.float64],
     length: NDArray[np.float64],
     arc: NDArray[np.float64],
-    starts: NDArray[np.float64],
-) -> NDArray[np.float64]:
-    """Arc position (along all polylines) of each polyline's point closest to its
-    start (the earliest on a tie), shape (C,); NaN where the start is NaN."""
-    sizes = np.diff(bounds)
-    start = np.repeat(starts, sizes, axis=0)
-    squared = length * length
-    along = np.einsum("ij,ij->i", start - points, step)
-    t = np.clip(along / np.where(squared > 0.0, squared, 1.0), 0.0, 1.0)
-    gap = points + t[:, None] * step - start
-    distance = np.einsum("ij,ij->i", gap, gap)
-    nearest = np.minimum.reduceat(distance, bounds[:-1])
-    hits = np.flatnonzero(distance == np.repeat(nearest, sizes))
-    if hits.size == 0:
-        return np.full(len(sizes), np.nan)
-    best = hits[np.minimum(np.searchsorted(hits, bounds[:-1]), hits.size - 1)]
-    position = arc[best] + t[best] * length[best]
-    position[np.isnan(nearest)] = np.nan
-    return position
+    lo: int,
+    hi: int,
+    start: NDArray[np.float64],
+) -> float:
+    """Arc position along polyline ``points[lo:hi]`` of its point closest to
+    ``start`` (the earliest on a tie)."""
+    best = -1
+    best_distance = np.inf
+    best_t = 0.0
+    for i in range(lo, hi):
+        squared = length[i] * length[i]
+        along = (start[0] - points[i, 0]) * step[i, 0] + (start[1] - points[i, 1]) * step[i, 1]
+        t = min(max(along / (squared if squared > 0.0 else 1.0), 0.0), 1.0)
+        gx = points[i, 0] + t * step[i, 0] - start[0]
+        gy = points[i, 1] + t * step[i, 1] - start[1]
+        distance = gx * gx + gy * gy
+        if distance < best_distance:
+            best, best_distance, best_t = i, distance, t
+    return arc[best] + best_t * length[best]

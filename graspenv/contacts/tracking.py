@@ -40,6 +40,13 @@ off a parent, and ``()`` for a touch-down. Fresh ids come from a counter that on
 grows until :meth:`ContactTracker.reset`; new contacts of one frame get them in raster
 order of their first pixel.
 
+**Cost.** Candidates for every rule come from a sweep over the contacts sorted by x
+(centroids within the match radius for rule 1; discs around the centroids that reach
+every outline point, for the overlap of rules 2 and 3), so a frame costs about linear
+time in its contacts rather than one test per pair; the rules then run in one
+compiled call. A frame holds its contacts as arrays; the :class:`Contact` objects
+are built only when asked for.
+
 A continuing contact's contour starts at the point of its outline closest to its
 previous contour's first point moved by the centroid's displacement, so index 0 does
 not jump around the contour from frame to frame; a new contact's contour starts at
@@ -50,23 +57,25 @@ ascending id.
 from __future__ import annotations
 
 from collections.abc import Iterator
-from dataclasses import dataclass
-from typing import Literal
+from dataclasses import dataclass, field
+from typing import Literal, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ContactConfig
-from graspenv.contacts.extract import find_components_batch, validate_mask
-from graspenv.contacts.resample import orient_ccw_batch, resample_closed_batch
+from graspenv.contacts.extract import components, traced_chains, validate_mask
+from graspenv.contacts.resample import gather, orient_ccw_kernel, resample_kernel
+from graspenv.jit import njit
 from graspenv.surface.geometry import Surface
 
 __all__ = ["Contact", "ContactFrame", "ContactStatus", "ContactTracker"]
 
 ContactStatus = Literal["new", "continuing"]
+G = TypeVar("G", bound=np.generic)
 
 
-def _frozen(array: NDArray[np.float64]) -> NDArray[np.float64]:
+def _frozen(array: NDArray[G]) -> NDArray[G]:
     array.setflags(write=False)
     return array
 
@@ -108,23 +117,97 @@ class Contact:
 
 @dataclass(frozen=True, eq=False)
 class ContactFrame:
-    """The contacts of one camera frame.
+    """The contacts of one camera frame, as arrays (contact i in ascending id).
+
+    The per-frame stages read the arrays; :attr:`contacts` builds one
+    :class:`Contact` per contact on first use. Every array is read-only.
 
     Attributes:
         index: frames since the tracker was created or reset, from 0.
-        contacts: the contacts present, in ascending id.
+        contact_ids: contact ids, ascending, int64, shape (C,) (:attr:`ids` as a tuple).
+        is_new: whether each contact appeared this frame, shape (C,).
+        centroids: metres, world frame, shape (C, 2).
+        areas: m², shape (C,).
+        outlines: every outline one after another, metres, world frame, shape (L, 2);
+            contact i's is ``outlines[outline_bounds[i]:outline_bounds[i + 1]]``.
+        outline_bounds: shape (C + 1,).
+        contours: every resampled contour one after another, shape (R, 2).
+        contour_bounds: shape (C + 1,).
         removed: ids present in the previous frame and gone now (lift-offs and
             contacts merged into another), ascending.
+        origins: where each contact came from, as the rules found it: the previous
+            id it keeps or split off, or -1, shape (C,); with ``merged_ids`` (the
+            previous ids each merged into another contact without keeping their id)
+            and ``merged_into`` (the index of that contact here) they give
+            :attr:`sources`.
     """
 
     index: int
-    contacts: tuple[Contact, ...]
+    contact_ids: NDArray[np.int64]
+    is_new: NDArray[np.bool_]
+    centroids: NDArray[np.float64]
+    areas: NDArray[np.float64]
+    outlines: NDArray[np.float64]
+    outline_bounds: NDArray[np.intp]
+    contours: NDArray[np.float64]
+    contour_bounds: NDArray[np.intp]
     removed: tuple[int, ...]
+    origins: NDArray[np.int64]
+    merged_ids: NDArray[np.int64]
+    merged_into: NDArray[np.intp]
+    _contacts: list[tuple[Contact, ...]] = field(default_factory=list, repr=False)
+
+    @classmethod
+    def empty(cls, index: int = 0, removed: tuple[int, ...] = ()) -> ContactFrame:
+        """A frame without contacts."""
+        bounds = np.zeros(1, np.intp)
+        none = np.zeros(0, np.int64)
+        return cls(
+            index, none, np.zeros(0, bool), np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)),
+            bounds, np.zeros((0, 2)), bounds, removed, none, none, np.zeros(0, np.intp),
+        )  # fmt: skip
+
+    @property
+    def sources(self) -> tuple[tuple[int, ...], ...]:
+        """Each contact's sources (module docstring), in contact order."""
+        swallowed: dict[int, list[int]] = {}
+        for into, merged_id in zip(
+            self.merged_into.tolist(), self.merged_ids.tolist(), strict=True
+        ):
+            swallowed.setdefault(into, []).append(merged_id)
+        return tuple(
+            () if origin < 0 else (origin, *sorted(swallowed.get(i, ()))) if not new else (origin,)
+            for i, (origin, new) in enumerate(
+                zip(self.origins.tolist(), self.is_new.tolist(), strict=True)
+            )
+        )
+
+    @property
+    def contacts(self) -> tuple[Contact, ...]:
+        """The contacts present, in ascending id (built on first use)."""
+        if not self._contacts:
+            ob, cb = self.outline_bounds, self.contour_bounds
+            sources = self.sources
+            self._contacts.append(
+                tuple(
+                    Contact(
+                        id=int(self.contact_ids[i]),
+                        contour=self.contours[cb[i] : cb[i + 1]],
+                        outline=self.outlines[ob[i] : ob[i + 1]],
+                        centroid=self.centroids[i],
+                        area=float(self.areas[i]),
+                        status="new" if self.is_new[i] else "continuing",
+                        sources=sources[i],
+                    )
+                    for i in range(len(self.contact_ids))
+                )
+            )
+        return self._contacts[0]
 
     @property
     def ids(self) -> tuple[int, ...]:
         """Ids of the contacts present, ascending."""
-        return tuple(c.id for c in self.contacts)
+        return tuple(self.contact_ids.tolist())
 
     @property
     def new(self) -> tuple[Contact, ...]:
@@ -138,9 +221,9 @@ class ContactFrame:
 
     def get(self, contact_id: int) -> Contact | None:
         """The contact with this id, or ``None``."""
-        for contact in self.contacts:
-            if contact.id == contact_id:
-                return contact
+        at = int(np.searchsorted(self.contact_ids, contact_id))
+        if at < len(self.contact_ids) and self.contact_ids[at] == contact_id:
+            return self.contacts[at]
         return None
 
     def __getitem__(self, contact_id: int) -> Contact:
@@ -150,22 +233,13 @@ class ContactFrame:
         return contact
 
     def __contains__(self, contact_id: object) -> bool:
-        return any(c.id == contact_id for c in self.contacts)
+        return isinstance(contact_id, int | np.integer) and self.get(int(contact_id)) is not None
 
     def __iter__(self) -> Iterator[Contact]:
         return iter(self.contacts)
 
     def __len__(self) -> int:
-        return len(self.contacts)
-
-
-@dataclass(frozen=True, eq=False)
-class _Blob:
-    """A component of the current mask in world units, before it has an id."""
-
-    outline: NDArray[np.float64]
-    centroid: NDArray[np.float64]
-    area: float
+        return len(self.contact_ids)
 
 
 class ContactTracker:
@@ -181,13 +255,17 @@ class ContactTracker:
         self.config = (config if config is not None else ContactConfig()).resolved()
         self._spacing = self.config.contour_spacing()
         self._pixel_area = float(np.prod(surface.pixel_size))
-        self._previous: tuple[Contact, ...] = ()
+        # Pixels to world (Surface.pixel_to_world): x = (c + 0.5)·sx − w/2,
+        # y = h/2 − (r + 0.5)·sy.
+        sx, sy = surface.pixel_size
+        self._transform = np.array([sx, sy, surface.size[0], surface.size[1]], dtype=float)
+        self._previous = ContactFrame.empty()
         self._next_id = 0
         self._index = 0
 
     def reset(self) -> None:
         """Forget all contacts; ids and the frame index start again from 0."""
-        self._previous = ()
+        self._previous = ContactFrame.empty()
         self._next_id = 0
         self._index = 0
 
@@ -206,156 +284,330 @@ class ContactTracker:
                 surface's shape.
         """
         image = validate_mask(mask, self.surface.shape)
-        blobs, outlines, bounds = self._blobs(image)
-        keeps, sources = self._match(self._previous, blobs)
+        chains, chain_bounds = traced_chains(image)
+        before = self._previous
+        (ids, is_new, centroids, areas, outlines, outline_bounds, contours, contour_bounds,
+         origins, merged_into, removed) = _track_frame(
+            chains, chain_bounds, image.shape[1], float(self.config.min_area),
+            self._transform, before.centroids, before.outlines, before.outline_bounds,
+            before.contact_ids, before.contours, before.contour_bounds,
+            self.config.match_radius, self._spacing, self._next_id,
+        )  # fmt: skip
+        self._next_id += int(np.count_nonzero(is_new))
+        frame = ContactFrame(
+            index=self._index,
+            contact_ids=_frozen(ids),
+            is_new=_frozen(is_new),
+            centroids=_frozen(centroids),
+            areas=_frozen(areas * self._pixel_area),
+            outlines=_frozen(outlines),
+            outline_bounds=_frozen(outline_bounds),
+            contours=_frozen(contours),
+            contour_bounds=_frozen(contour_bounds),
+            removed=tuple(before.contact_ids[removed].tolist()),
+            origins=_frozen(origins),
+            merged_ids=_frozen(before.contact_ids[merged_into >= 0]),
+            merged_into=_frozen(merged_into[merged_into >= 0]),
+        )
+        return self._advance(frame)
 
-        by_id = {c.id: c for c in self._previous}
-        # Every contour of the frame in one pass; a continuing one starts near its
-        # previous first point moved with the centroid.
-        starts = np.full((len(blobs), 2), np.nan)
-        for i, kept in enumerate(keeps):
-            if kept is not None:
-                before = by_id[kept]
-                starts[i] = before.contour[0] + (blobs[i].centroid - before.centroid)
-        contours: list[NDArray[np.float64]] = []
-        if blobs:
-            resampled, cuts = resample_closed_batch(outlines, bounds, self._spacing, starts)
-            contours = [resampled[cuts[i] : cuts[i + 1]] for i in range(len(blobs))]
-        contacts: list[Contact] = []
-        for i, blob in enumerate(blobs):
-            kept = keeps[i]
-            if kept is not None:
-                contact_id = kept
-            else:
-                contact_id = self._next_id
-                self._next_id += 1
-            contacts.append(
-                Contact(
-                    id=contact_id,
-                    contour=_frozen(contours[i]),
-                    outline=_frozen(blob.outline),
-                    centroid=_frozen(blob.centroid),
-                    area=blob.area,
-                    status="continuing" if kept is not None else "new",
-                    sources=sources[i],
-                )
-            )
-        contacts.sort(key=lambda c: c.id)
-        kept_ids = {k for k in keeps if k is not None}
-        removed = tuple(sorted(c.id for c in self._previous if c.id not in kept_ids))
-        frame = ContactFrame(self._index, tuple(contacts), removed)
-        self._previous = frame.contacts
+    def _advance(self, frame: ContactFrame) -> ContactFrame:
+        self._previous = frame
         self._index += 1
         return frame
 
-    def _blobs(
-        self, image: NDArray[np.uint8]
-    ) -> tuple[list[_Blob], NDArray[np.float64], NDArray[np.intp]]:
-        """The mask's components in world units, outlines counter-clockwise: one
-        transform for every outline and centroid of the frame.
 
-        Returns:
-            (blobs, outlines, bounds): the blobs, whose outlines are views of
-            ``outlines`` (all of them one after another, metres, world frame), blob i's
-            being ``outlines[bounds[i]:bounds[i + 1]]``.
-        """
-        components, pixels, bounds = find_components_batch(image, self.config.min_area)
-        if not components:
-            return [], np.zeros((0, 2)), bounds
-        total = len(pixels)
-        world = self.surface.pixel_to_world(
-            np.concatenate([pixels, [c.centroid for c in components]])
-        )
-        outlines = orient_ccw_batch(world[:total], bounds)
-        blobs = [
-            _Blob(outlines[bounds[i] : bounds[i + 1]], world[total + i], c.area * self._pixel_area)
-            for i, c in enumerate(components)
-        ]
-        return blobs, outlines, bounds
+@njit
+def _track_frame(
+    chains: NDArray[np.int32],
+    chain_bounds: NDArray[np.intp],
+    width: int,
+    min_area: float,
+    transform: NDArray[np.float64],
+    prev_centroids: NDArray[np.float64],
+    prev_outlines: NDArray[np.float64],
+    prev_outline_bounds: NDArray[np.intp],
+    prev_ids: NDArray[np.int64],
+    prev_contours: NDArray[np.float64],
+    prev_contour_bounds: NDArray[np.intp],
+    radius: float,
+    spacing: float,
+    next_id: int,
+) -> tuple[
+    NDArray[np.int64],
+    NDArray[np.bool_],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.intp],
+    NDArray[np.float64],
+    NDArray[np.intp],
+    NDArray[np.int64],
+    NDArray[np.intp],
+    NDArray[np.bool_],
+]:
+    """One frame of :meth:`ContactTracker.update` from its traced chains.
 
-    def _match(
-        self, previous: tuple[Contact, ...], blobs: list[_Blob]
-    ) -> tuple[list[int | None], list[tuple[int, ...]]]:
-        """Which previous id each blob keeps (None: new) and its sources."""
-        keeps: list[int | None] = [None] * len(blobs)
-        sources: list[tuple[int, ...]] = [()] * len(blobs)
-        if not previous or not blobs:
-            return keeps, sources
-        prev_xy = np.array([c.centroid for c in previous])
-        cur_xy = np.array([b.centroid for b in blobs])
-        distance = np.linalg.norm(prev_xy[:, None, :] - cur_xy[None, :, :], axis=2)
-
-        # 1. Motion: greedy one-to-one by distance, ties by previous id then raster.
-        taken_prev = np.zeros(len(previous), dtype=bool)
-        p_idx, c_idx = np.nonzero(distance <= self.config.match_radius)
-        ids = np.array([c.id for c in previous])
-        for n in np.lexsort((c_idx, ids[p_idx], distance[p_idx, c_idx])):
-            p, c = int(p_idx[n]), int(c_idx[n])
-            if taken_prev[p] or keeps[c] is not None:
-                continue
-            taken_prev[p] = True
-            keeps[c] = previous[p].id
-
-        def overlap(p: int, c: int) -> bool:
-            return _overlap(previous[p].centroid, previous[p].outline, blobs[c])
-
-        # 2. Merges: a leftover previous contact overlapping a current one.
-        merged: dict[int, list[int]] = {c: [] for c in range(len(blobs))}
-        joined: dict[int, list[int]] = {}
-        for p in np.argsort(ids, kind="stable").tolist():
-            if taken_prev[p]:
-                continue
-            near = [c for c in range(len(blobs)) if overlap(p, c)]
-            if not near:
-                continue
-            c = min(near, key=lambda c: (distance[p, c], c))
-            joined.setdefault(c, []).append(p)
-            taken_prev[p] = True
-        for c, ps in joined.items():
-            if keeps[c] is None:
-                nearest = min(ps, key=lambda p: (distance[p, c], previous[p].id))
-                keeps[c] = previous[nearest].id
-            merged[c].extend(previous[p].id for p in ps if previous[p].id != keeps[c])
-        for c, kept in enumerate(keeps):
-            if kept is not None:
-                sources[c] = (kept, *sorted(merged[c]))
-
-        # 3. Splits: a leftover current contact overlapping a previous one.
-        for c in range(len(blobs)):
-            if keeps[c] is not None:
-                continue
-            near = [p for p in range(len(previous)) if overlap(p, c)]
-            if near:
-                parent = min(near, key=lambda p: (distance[p, c], previous[p].id))
-                sources[c] = (previous[parent].id,)
-        return keeps, sources
+    Returns, with contacts in ascending id: ids, is_new, centroids (metres), areas
+    (pixels), outlines and bounds, contours and bounds, origins (the previous id each
+    keeps or split off, or -1); and over the previous contacts: the index here of the
+    contact each merged into without keeping its id (or -1), and which are removed.
+    """
+    _, _, px_outlines, bounds, areas, px_centroids = components(
+        chains, chain_bounds, width, min_area
+    )
+    count = len(areas)
+    sx, sy, w, h = transform[0], transform[1], transform[2], transform[3]
+    outlines = np.empty_like(px_outlines)
+    for i in range(len(px_outlines)):
+        outlines[i, 0] = (px_outlines[i, 0] + 0.5) * sx - 0.5 * w
+        outlines[i, 1] = 0.5 * h - (px_outlines[i, 1] + 0.5) * sy
+    centroids = np.empty_like(px_centroids)
+    for i in range(count):
+        centroids[i, 0] = (px_centroids[i, 0] + 0.5) * sx - 0.5 * w
+        centroids[i, 1] = 0.5 * h - (px_centroids[i, 1] + 0.5) * sy
+    outlines, _ = orient_ccw_kernel(outlines, bounds)
+    keep, merged, parent = _match(
+        prev_centroids, prev_outlines, prev_outline_bounds, prev_ids,
+        centroids, outlines, bounds, radius,
+    )  # fmt: skip
+    # A continuing contour starts near its previous first point moved with the
+    # centroid; fresh ids go to new contacts in raster order.
+    starts = np.full((count, 2), np.nan)
+    ids = np.empty(count, np.int64)
+    origins = np.full(count, -1, np.int64)
+    for c in range(count):
+        p = keep[c]
+        if p >= 0:
+            first = prev_contour_bounds[p]
+            starts[c, 0] = prev_contours[first, 0] + centroids[c, 0] - prev_centroids[p, 0]
+            starts[c, 1] = prev_contours[first, 1] + centroids[c, 1] - prev_centroids[p, 1]
+            ids[c] = prev_ids[p]
+            origins[c] = prev_ids[p]
+        else:
+            ids[c] = next_id
+            next_id += 1
+            if parent[c] >= 0:
+                origins[c] = prev_ids[parent[c]]
+    contours, contour_bounds = resample_kernel(outlines, bounds, spacing, starts)
+    order = np.argsort(ids, kind="mergesort")
+    rank = np.empty(count, np.intp)
+    rank[order] = np.arange(count)
+    removed = np.ones(len(prev_ids), np.bool_)
+    for c in range(count):
+        if keep[c] >= 0:
+            removed[keep[c]] = False
+    merged_into = np.full(len(prev_ids), -1, np.intp)
+    for p in range(len(prev_ids)):
+        if merged[p] >= 0:
+            merged_into[p] = rank[merged[p]]
+    outlines, outline_bounds = gather(outlines, bounds, order)
+    contours, contour_bounds = gather(contours, contour_bounds, order)
+    return (
+        ids[order], keep[order] < 0, centroids[order], areas[order], outlines, outline_bounds,
+        contours, contour_bounds, origins[order], merged_into, removed,
+    )  # fmt: skip
 
 
 # At least this fraction of one outline inside the other makes two contacts overlap.
 _OVERLAP = 0.25
 
 
-def _overlap(centroid: NDArray[np.float64], outline: NDArray[np.float64], blob: _Blob) -> bool:
-    """Whether a previous contact (centroid (2,), outline (L, 2), metres, world frame)
-    and a current blob overlap, in the sense of the module docstring."""
-    reach = np.max(np.linalg.norm(outline - centroid, axis=1))
-    blob_reach = np.max(np.linalg.norm(blob.outline - blob.centroid, axis=1))
-    if np.linalg.norm(centroid - blob.centroid) > reach + blob_reach:
-        return False
-    if _inside(centroid[None, :], blob.outline)[0] or _inside(blob.centroid[None, :], outline)[0]:
+@njit
+def _match(
+    prev_centroids: NDArray[np.float64],
+    prev_outlines: NDArray[np.float64],
+    prev_bounds: NDArray[np.intp],
+    prev_ids: NDArray[np.int64],
+    centroids: NDArray[np.float64],
+    outlines: NDArray[np.float64],
+    bounds: NDArray[np.intp],
+    radius: float,
+) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
+    """The module docstring's rules.
+
+    Returns:
+        (keep, merged, parent): for each current contact the previous contact
+        (index) whose id it keeps, or -1, shape (C,); for each previous contact the
+        current contact it merged into without keeping its id, or -1, shape (P,); for
+        each new current contact the previous contact it split off, or -1, shape (C,).
+    """
+    n_prev, n_cur = len(prev_centroids), len(centroids)
+    keep = np.full(n_cur, -1, np.intp)
+    merged = np.full(n_prev, -1, np.intp)
+    parent = np.full(n_cur, -1, np.intp)
+    if n_prev == 0 or n_cur == 0:
+        return keep, merged, parent
+    prev_reach = _reach(prev_centroids, prev_outlines, prev_bounds)
+    reach = _reach(centroids, outlines, bounds)
+    by_x = np.argsort(centroids[:, 0], kind="mergesort")
+    xs = centroids[by_x, 0]
+    taken = np.zeros(n_prev, np.bool_)
+
+    # 1. Motion: greedy one-to-one by distance, ties by previous id then raster.
+    pair_p, pair_c, pair_d = _near_pairs(prev_centroids, centroids, by_x, xs, radius)
+    order = np.argsort(pair_c, kind="mergesort")
+    order = order[np.argsort(prev_ids[pair_p[order]], kind="mergesort")]
+    order = order[np.argsort(pair_d[order], kind="mergesort")]
+    for k in order:
+        p, c = pair_p[k], pair_c[k]
+        if taken[p] or keep[c] >= 0:
+            continue
+        taken[p] = True
+        keep[c] = p
+
+    # 2. Merges: a leftover previous contact overlapping a current one goes to the
+    # nearest such (ties: lower index).
+    widest = reach.max()
+    joined = np.full(n_prev, -1, np.intp)
+    for p in np.argsort(prev_ids, kind="mergesort"):
+        if taken[p]:
+            continue
+        best, best_d = -1, np.inf
+        lo = np.searchsorted(xs, prev_centroids[p, 0] - prev_reach[p] - widest)
+        hi = np.searchsorted(xs, prev_centroids[p, 0] + prev_reach[p] + widest, side="right")
+        for s in range(lo, hi):
+            c = by_x[s]
+            d = _distance(prev_centroids[p], centroids[c])
+            if d > prev_reach[p] + reach[c] or d > best_d or (d == best_d and c > best):
+                continue
+            if _overlap(
+                prev_centroids, prev_outlines, prev_bounds, p, centroids, outlines, bounds, c
+            ):
+                best, best_d = c, d
+        if best >= 0:
+            joined[p] = best
+            taken[p] = True
+    for p in np.argsort(prev_ids, kind="mergesort"):
+        c = joined[p]
+        if c < 0:
+            continue
+        if keep[c] < 0:
+            # The nearest previous contact that merged into it keeps its id (ties:
+            # lower id); it is the first in id order at the smallest distance.
+            nearest, nearest_d = -1, np.inf
+            for q in np.argsort(prev_ids, kind="mergesort"):
+                if joined[q] == c:
+                    d = _distance(prev_centroids[q], centroids[c])
+                    if d < nearest_d:
+                        nearest, nearest_d = q, d
+            keep[c] = nearest
+        if keep[c] != p:
+            merged[p] = c
+
+    # 3. Splits: a leftover current contact overlapping a previous one split off the
+    # nearest such (ties: lower id).
+    by_px = np.argsort(prev_centroids[:, 0], kind="mergesort")
+    pxs = prev_centroids[by_px, 0]
+    prev_widest = prev_reach.max()
+    for c in range(n_cur):
+        if keep[c] >= 0:
+            continue
+        best, best_d, best_id = -1, np.inf, np.int64(0)
+        lo = np.searchsorted(pxs, centroids[c, 0] - reach[c] - prev_widest)
+        hi = np.searchsorted(pxs, centroids[c, 0] + reach[c] + prev_widest, side="right")
+        for s in range(lo, hi):
+            p = by_px[s]
+            d = _distance(prev_centroids[p], centroids[c])
+            if d > prev_reach[p] + reach[c]:
+                continue
+            if best >= 0 and (d > best_d or (d == best_d and prev_ids[p] >= best_id)):
+                continue
+            if _overlap(
+                prev_centroids, prev_outlines, prev_bounds, p, centroids, outlines, bounds, c
+            ):
+                best, best_d, best_id = p, d, prev_ids[p]
+        parent[c] = best
+    return keep, merged, parent
+
+
+@njit
+def _distance(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
+    return float(np.hypot(a[0] - b[0], a[1] - b[1]))
+
+
+@njit
+def _reach(
+    centroids: NDArray[np.float64], outlines: NDArray[np.float64], bounds: NDArray[np.intp]
+) -> NDArray[np.float64]:
+    """How far each outline reaches from its centroid, metres, shape (C,)."""
+    reach = np.zeros(len(centroids))
+    for c in range(len(centroids)):
+        for i in range(bounds[c], bounds[c + 1]):
+            reach[c] = max(reach[c], _distance(outlines[i], centroids[c]))
+    return reach
+
+
+@njit
+def _near_pairs(
+    prev_centroids: NDArray[np.float64],
+    centroids: NDArray[np.float64],
+    by_x: NDArray[np.intp],
+    xs: NDArray[np.float64],
+    radius: float,
+) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64]]:
+    """(previous, current, distance) of every pair of centroids at most ``radius``
+    apart, found by a sweep over the current centroids sorted by x."""
+    ranges = np.empty((len(prev_centroids), 2), np.intp)
+    total = 0
+    for p in range(len(prev_centroids)):
+        ranges[p, 0] = np.searchsorted(xs, prev_centroids[p, 0] - radius)
+        ranges[p, 1] = np.searchsorted(xs, prev_centroids[p, 0] + radius, side="right")
+        total += ranges[p, 1] - ranges[p, 0]
+    pair_p = np.empty(total, np.intp)
+    pair_c = np.empty(total, np.intp)
+    pair_d = np.empty(total)
+    n = 0
+    for p in range(len(prev_centroids)):
+        for s in range(ranges[p, 0], ranges[p, 1]):
+            c = by_x[s]
+            d = _distance(prev_centroids[p], centroids[c])
+            if d <= radius:
+                pair_p[n], pair_c[n], pair_d[n] = p, c, d
+                n += 1
+    return pair_p[:n], pair_c[:n], pair_d[:n]
+
+
+@njit
+def _overlap(
+    prev_centroids: NDArray[np.float64],
+    prev_outlines: NDArray[np.float64],
+    prev_bounds: NDArray[np.intp],
+    p: int,
+    centroids: NDArray[np.float64],
+    outlines: NDArray[np.float64],
+    bounds: NDArray[np.intp],
+    c: int,
+) -> bool:
+    """Whether previous contact p and current contact c overlap (module docstring)."""
+    mine = prev_outlines[prev_bounds[p] : prev_bounds[p + 1]]
+    theirs = outlines[bounds[c] : bounds[c + 1]]
+    if _inside(centroids[c, 0], centroids[c, 1], mine):
         return True
-    return bool(
-        np.mean(_inside(outline, blob.outline)) >= _OVERLAP
-        or np.mean(_inside(blob.outline, outline)) >= _OVERLAP
-    )
+    if _inside(prev_centroids[p, 0], prev_centroids[p, 1], theirs):
+        return True
+    return _share_inside(mine, theirs) >= _OVERLAP or _share_inside(theirs, mine) >= _OVERLAP
 
 
-def _inside(points: NDArray[np.float64], polygon: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """Which points (K, 2) lie inside a closed polygon (L, 2), same frame; even-odd."""
-    x, y = points[:, :1], points[:, 1:]
-    xi, yi = polygon[None, :, 0], polygon[None, :, 1]
-    xj, yj = np.roll(xi, -1, axis=1), np.roll(yi, -1, axis=1)
-    straddles = (yi > y) != (yj > y)
-    rise = np.where(straddles, yj - yi, 1.0)
-    crossing = xi + (y - yi) * (xj - xi) / rise
-    return np.count_nonzero(straddles & (x < crossing), axis=1) % 2 == 1
+@njit
+def _share_inside(points: NDArray[np.float64], polygon: NDArray[np.float64]) -> float:
+    """Fraction of ``points`` (K, 2) inside the closed ``polygon`` (L, 2)."""
+    inside = 0
+    for k in range(len(points)):
+        if _inside(points[k, 0], points[k, 1], polygon):
+            inside += 1
+    return inside / len(points)
+
+
+@njit
+def _inside(x: float, y: float, polygon: NDArray[np.float64]) -> bool:
+    """Whether (x, y) lies inside the closed polygon (L, 2), same frame; even-odd."""
+    crossings = 0
+    n = len(polygon)
+    for i in range(n):
+        xi, yi = polygon[i, 0], polygon[i, 1]
+        j = i + 1 if i + 1 < n else 0
+        xj, yj = polygon[j, 0], polygon[j, 1]
+        if (yi > y) != (yj > y) and x < xi + (y - yi) * (xj - xi) / (yj - yi):
+            crossings += 1
+    return crossings % 2 == 1

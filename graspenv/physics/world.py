@@ -35,7 +35,7 @@ import contextlib
 import itertools
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Callable
 from dataclasses import dataclass
 from types import TracebackType
 
@@ -44,6 +44,8 @@ import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
 
 from graspenv.config import ObjectConfig, SceneConfig
+from graspenv.geometry import SHAPE_CODES, footprint_depths
+from graspenv.physics.control import REST_TOLERANCE, ParticleDrive
 from graspenv.physics.pool import (
     OBJECT_GROUP,
     PARTICLE_GROUP,
@@ -63,15 +65,7 @@ _FLOOR_HALF_SIZE = 2.0
 _RAY_BATCH = 8192
 # Rays start this far above the highest point any object could reach while resting.
 _RAY_CLEARANCE = 0.5
-# Points on the rim of a cylinder's end discs used to draw its footprint.
-_CYLINDER_RIM_POINTS = 32
-# A cylinder whose top leans less than this off its base (metres) casts the shadow of
-# its end disc: 1 µm, far below the penetration margin and the culling margin.
-_UPRIGHT_LEAN = 1e-6
 
-# A bottom particle may sit this far above its support before it is pulled down
-# (Bullet's resting contacts sink about 0.01-0.03 mm, never rise).
-_REST_TOLERANCE = 2e-4
 _OBJECT_MASK = OBJECT_GROUP | STATIC_GROUP | PARTICLE_GROUP
 _STATIC_MASK = OBJECT_GROUP | PARTICLE_GROUP
 _ZERO = (0.0, 0.0, 0.0)
@@ -605,15 +599,15 @@ class PhysicsWorld:
             distance: a point is never nearer an object than its depth says (what
             culling needs to be safe). Shapes (N,).
         """
-        points = np.asarray(xy, dtype=float).reshape(-1, 2)
-        best = np.full(points.shape[0], -np.inf)
-        owner = np.full(points.shape[0], -1, dtype=np.int64)
-        for index, config in enumerate(self.scene.objects):
-            depth = self._footprint_depth(index, config, points)
-            better = depth > best
-            best[better] = depth[better]
-            owner[better] = index
-        return owner, best
+        points = np.ascontiguousarray(xy, dtype=float).reshape(-1, 2)
+        client = self.client
+        positions = np.empty((len(self._object_bodies), 3))
+        rotations = np.empty((len(self._object_bodies), 9))
+        for i, body in enumerate(self._object_bodies):
+            position, orientation = pb.getBasePositionAndOrientation(body, physicsClientId=client)
+            positions[i] = position
+            rotations[i] = pb.getMatrixFromQuaternion(orientation)  # row-major 3 × 3
+        return footprint_depths(points, self._shape_codes, self._sizes, positions, rotations)
 
     def contact_report(self, name: str) -> ContactReport:
         """Contacts on an object from the last physics sub-step.
@@ -658,29 +652,10 @@ class PhysicsWorld:
     ) -> NDArray[np.float64]:
         """Advance one camera frame, driving every particle stack to its contour point.
 
-        For each Python sub-step s = 1..S of the frame, each particle's planar target
-        moves along the straight line from its last frame's target to this frame's
-        (``x*_s``, at constant velocity ``u``), and the particle is driven by
-        Wilson's law, with the target's velocity fed forward::
-
-            v* = (x*_s − x) / Δt + (1 − h/Δt) u   (|v*| ≤ physics.max_particle_speed)
-            F  = m (v* − v) / Δt                  (|F| ≤ physics.max_particle_force)
-
-        in the table plane, with h the sub-step and Δt = ``physics.control_time``
-        (or h if longer). At Δt = h this is the paper's law; for Δt > h the feed
-        forward keeps a free particle on a moving target instead of lagging by u·Δt.
-        A particle held off its point by a depth d (inside an object) pushes with
-        about m·d/Δt² (1152 N/m at the defaults: squeezing deeper grips harder). A
-        bottom particle sliding on the table stays short of its point by its table
-        friction over that stiffness (about 0.09 mm at the defaults).
-
-        In z, a bottom particle is pressed down by ``proxy.down_force`` (its weight is
-        cancelled, so the press does not depend on its mass) and, if it rises above
-        the surface under it (rays once per frame), pulled back by the same law. A
-        particle in layer l > 0 of a stack is driven the same way to
-        ``proxy.stack_spacing · l`` above its bottom particle. A bottom particle's
-        friction acts only in the table plane, an upper one's in every direction
-        (see :meth:`ParticlePool.set_upper`).
+        Each particle follows Wilson's law (:mod:`graspenv.physics.control`) through
+        every sub-step of the frame. A bottom particle's friction acts only in the
+        table plane, an upper one's in every direction (see
+        :meth:`ParticlePool.set_upper`).
 
         Particles have infinite rotational inertia, so no contact can change their
         angular velocity: it is set here to ``spin`` about z. A rigid fingertip's
@@ -717,56 +692,33 @@ class PhysicsWorld:
             raise ValueError(f"targets must have shape ({k}, 2), got {goal_xy.shape}")
         spin_z = np.broadcast_to(np.asarray(spin, dtype=float), (k,))
         frame_dt = self.frame_dt if dt is None else float(dt)
-        substeps = self.substeps
-        h = frame_dt / substeps
-        client = self.client
-        if h != self.substep_dt:
-            pb.setTimeStep(h, physicsClientId=client)
+        h = frame_dt / self.substeps
         flat = ids.reshape(-1)
         if not self.pool.is_active(flat).all():
             raise ValueError(
                 f"step_frame got parked or unknown particles: {flat[~self.pool.is_active(flat)]}"
             )
         if flat.size == 0:
-            bullet = 0.0
-            for _ in range(substeps):
-                self._apply_pending_forces()
-                tic = time.perf_counter()
-                pb.stepSimulation(physicsClientId=client)
-                bullet += time.perf_counter() - tic
-                self.pool.physics_steps += 1
-            self._pending_force = {}
-            self._restore_time_step(h)
-            self.bullet_seconds = bullet
+            self._substeps(h)
             return np.zeros((*np.shape(particles), 3))
 
-        proxy, physics = self.scene.proxy, self.scene.physics
-        mass = proxy.particle_mass
-        tau = max(physics.control_time, h)
-        v_max = physics.max_particle_speed
-        dv_max = physics.max_particle_force * h / mass
         goal = np.repeat(goal_xy, layers, axis=0)
-        start = self.pool.last_targets(flat)
-        step_xy = goal - start
-        # With Δt equal to the sub-step the position term alone lands on the moving
-        # target (the paper's law); with a longer Δt it would lag by u·Δt, so the
-        # target's velocity is fed forward by the share the position term misses.
-        feed_forward = (1.0 - h / tau) * step_xy / frame_dt
-        is_upper = np.tile(np.arange(layers) > 0, k)
-        rise = np.tile(np.arange(layers) * proxy.stack_spacing, k)[is_upper]
-        bottom_row = np.repeat(np.arange(k) * layers, layers)[is_upper]
+        drive = ParticleDrive.for_frame(
+            self.pool.last_targets(flat),
+            goal,
+            layers,
+            frame_dt,
+            self.substeps,
+            self.scene.proxy,
+            self.scene.physics,
+        )
         angular = [(0.0, 0.0, w) for w in np.repeat(spin_z, layers).tolist()]
-        # Bullet adds g·h itself; the weight is cancelled and the press applied here.
-        press_dv = (physics.gravity - proxy.down_force / mass) * h
-        gain = h / tau
-
-        self.pool.set_upper(flat, is_upper)
+        self.pool.set_upper(flat, ~drive.is_bottom)
         bodies = self.pool.body_ids(flat).tolist()
         n = len(bodies)
+        client = self.client
         get_position = pb.getBasePositionAndOrientation
         set_velocity = pb.resetBaseVelocity
-        step = pb.stepSimulation
-        bullet = 0.0
         chain = itertools.chain.from_iterable
 
         def read_positions() -> NDArray[np.float64]:
@@ -782,64 +734,31 @@ class PhysicsWorld:
         v, known = self.pool.cached_velocities(flat)
         for i in np.flatnonzero(~known).tolist():
             v[i] = pb.getBaseVelocity(bodies[i], client)[0]
-        is_bottom = ~is_upper
-        rest_z = np.zeros(0)  # set from the first sub-step's positions
         x = read_positions()
-        for s in range(1, substeps + 1):
-            if s == 1:
-                # Where each bottom particle should rest: on the surface under it
-                # (rays from the particle down ignore whatever is above it). One at
-                # table level cannot be above its support and needs no ray.
-                bottom_z = x[is_bottom, 2]
-                rest_z = np.full(bottom_z.shape, self.pool.radius)
-                raised = bottom_z > self.pool.radius + _REST_TOLERANCE
-                if np.any(raised):
-                    rest_z[raised] += self._support_heights(x[is_bottom][raised])
-            target = start + (s / substeps) * step_xy
-            v_star = feed_forward + (target - x[:, :2]) / tau
-            speed = np.hypot(v_star[:, 0], v_star[:, 1])
-            too_fast = speed > v_max
-            if np.any(too_fast):
-                v_star[too_fast] *= (v_max / speed[too_fast])[:, None]
-            dv = gain * (v_star - v[:, :2])
-            magnitude = np.hypot(dv[:, 0], dv[:, 1])
-            too_strong = magnitude > dv_max
-            if np.any(too_strong):
-                dv[too_strong] *= (dv_max / magnitude[too_strong])[:, None]
-            new_v = v.copy()
-            new_v[:, :2] += dv
-            new_v[:, 2] += press_dv
-            # Friction cannot hold a bottom particle down (it is planar), and a
-            # squeezed face tilted by a degree pushes it up harder than the press:
-            # a bottom particle that rose above its support is pulled back by the
-            # same law, so it cannot be squirted up a face or wedged under an edge.
-            excess = x[is_bottom, 2] - rest_z - _REST_TOLERANCE
-            if np.any(excess > 0):
-                vz = v[is_bottom, 2]
-                pull = np.clip(gain * (-np.maximum(excess, 0.0) / tau - vz), -dv_max, 0.0)
-                new_v[is_bottom, 2] += np.where(excess > 0, pull, 0.0)
-            if layers > 1:
-                z_goal = x[bottom_row, 2] + rise
-                upper_z, upper_vz = x[is_upper, 2], v[is_upper, 2]
-                vz_star = np.clip((z_goal - upper_z) / tau, -v_max, v_max)
-                lift = np.clip(gain * (vz_star - upper_vz), -dv_max, dv_max)
-                new_v[is_upper, 2] = upper_vz + physics.gravity * h + lift
-            for body, lin, ang in zip(bodies, new_v.tolist(), angular, strict=True):
-                set_velocity(body, lin, ang, client)
-            self._apply_pending_forces()
-            tic = time.perf_counter()
-            step(client)
-            bullet += time.perf_counter() - tic
-            self.pool.physics_steps += 1
+        # Where each bottom particle should rest: on the surface under it (rays from
+        # the particle down ignore whatever is above it). One at table level cannot
+        # be above its support and needs no ray.
+        bottom_z = x[drive.is_bottom, 2]
+        rest_z = np.full(bottom_z.shape, self.pool.radius)
+        raised = bottom_z > self.pool.radius + REST_TOLERANCE
+        if np.any(raised):
+            rest_z[raised] += self._support_heights(x[drive.is_bottom][raised])
+        state = [x, v]
+
+        def drive_particles(substep: int) -> None:
+            velocity = drive.velocities(substep, state[0], state[1], rest_z)
+            for body, linear, spin_of in zip(bodies, velocity.tolist(), angular, strict=True):
+                set_velocity(body, linear, spin_of, client)
+
+        def observe() -> None:
             moved = read_positions()
-            v = (moved - x) / h
-            x = moved
-        self.pool.record_velocities(flat, v)
+            state[1] = (moved - state[0]) / h
+            state[0] = moved
+
+        self._substeps(h, drive_particles, observe)
+        self.pool.record_velocities(flat, state[1])
         self.pool.set_last_targets(flat, goal)
-        self._pending_force = {}
-        self._restore_time_step(h)
-        self.bullet_seconds = bullet
-        return x.reshape(*np.shape(particles), 3)
+        return state[0].reshape(*np.shape(particles), 3)
 
     def step_bodies(self, handles: ArrayLike, goals: ArrayLike, dt: float | None = None) -> None:
         """Advance one camera frame, driving rigid proxy bodies to their goal poses.
@@ -852,20 +771,37 @@ class PhysicsWorld:
         """
         frame_dt = self.frame_dt if dt is None else float(dt)
         h = frame_dt / self.substeps
+        tau = max(self.scene.physics.control_time, h)
+        self._substeps(h, lambda _: self.rigid_proxies.drive(handles, goals, h, tau))
+
+    def _substeps(
+        self,
+        h: float,
+        drive: Callable[[int], None] | None = None,
+        observe: Callable[[], None] | None = None,
+    ) -> None:
+        """The frame's physics sub-steps of ``h`` seconds: for each s = 1..S, drive
+        the proxies, push the objects, step Bullet, then observe. Pending forces are
+        dropped afterwards; :attr:`bullet_seconds` gets the time in Bullet's step."""
         client = self.client
         if h != self.substep_dt:
             pb.setTimeStep(h, physicsClientId=client)
-        tau = max(self.scene.physics.control_time, h)
+        clock = time.perf_counter
+        step = pb.stepSimulation
         bullet = 0.0
-        for _ in range(self.substeps):
-            self.rigid_proxies.drive(handles, goals, h, tau)
+        for s in range(1, self.substeps + 1):
+            if drive is not None:
+                drive(s)
             self._apply_pending_forces()
-            tic = time.perf_counter()
-            pb.stepSimulation(physicsClientId=client)
-            bullet += time.perf_counter() - tic
+            tic = clock()
+            step(client)
+            bullet += clock() - tic
             self.pool.physics_steps += 1
+            if observe is not None:
+                observe()
         self._pending_force = {}
-        self._restore_time_step(h)
+        if h != self.substep_dt:
+            pb.setTimeStep(self.substep_dt, physicsClientId=client)
         self.bullet_seconds = bullet
 
     def rest_heights(self, xy: ArrayLike) -> NDArray[np.float64]:
@@ -931,10 +867,6 @@ class PhysicsWorld:
                 physicsClientId=client,
             )
 
-    def _restore_time_step(self, h: float) -> None:
-        if h != self.substep_dt:
-            pb.setTimeStep(self.substep_dt, physicsClientId=self.client)
-
     def _build_scene(self) -> None:
         client = self.client
         physics = self.scene.physics
@@ -967,6 +899,11 @@ class PhysicsWorld:
             self._create_object(o, object_rgba(i)) for i, o in enumerate(self.scene.objects)
         ]
         self._body_to_object = {b: i for i, b in enumerate(self._object_bodies)}
+        # The objects' shapes and sizes as the footprint kernel takes them.
+        self._shape_codes = np.array([SHAPE_CODES[o.shape] for o in self.scene.objects], np.int64)
+        self._sizes = np.zeros((len(self.scene.objects), 3))
+        for i, o in enumerate(self.scene.objects):
+            self._sizes[i, : len(o.size)] = o.size
 
     def _static_box(
         self,
@@ -1072,67 +1009,6 @@ class PhysicsWorld:
             tops.append(high[2])
         return max(tops) + _RAY_CLEARANCE
 
-    def _footprint_depth(
-        self, index: int, config: ObjectConfig, points: NDArray[np.float64]
-    ) -> NDArray[np.float64]:
-        body = self._object_bodies[index]
-        position, orientation = pb.getBasePositionAndOrientation(body, physicsClientId=self.client)
-        offset = points - position[:2]
-        if config.shape == "sphere":
-            return config.size[0] - np.hypot(offset[:, 0], offset[:, 1])
-        r = pb.getMatrixFromQuaternion(orientation)  # row-major 3 × 3
-        if config.shape == "box":
-            return _box_shadow_depth(r, config.size, offset)
-        # Upright (the axis within a micrometre of vertical over the object's height),
-        # a cylinder's shadow is its end disc: no hull needed.
-        radius, height = config.size
-        if math.hypot(r[2], r[5]) * height < _UPRIGHT_LEAN:
-            return radius - np.hypot(offset[:, 0], offset[:, 1])
-        angle = np.linspace(0.0, 2 * math.pi, _CYLINDER_RIM_POINTS, endpoint=False)
-        rim = np.column_stack([radius * np.cos(angle), radius * np.sin(angle)])
-        local = np.concatenate(
-            [
-                np.column_stack([rim, np.full(len(rim), -height / 2)]),
-                np.column_stack([rim, np.full(len(rim), height / 2)]),
-            ]
-        )
-        rotation = np.array(r).reshape(3, 3)
-        return _convex_depth(_convex_hull((local @ rotation.T)[:, :2]), offset)
-
-
-def _box_shadow_depth(
-    r: Sequence[float], size: Sequence[float], offset: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    """Depth of points inside the shadow of a box in any orientation (negative outside).
-
-    The shadow of a box is the Minkowski sum of its three half-axes projected on the
-    table (a zonogon, a hexagon or a rectangle): for each projected axis g_i, two of
-    its edges are parallel to g_i, at ±h_i = Σ_j |n_i · g_j| along its normal n_i.
-    The depth is the smallest h_i − |n_i · p| over the axes that do not project to
-    a point, which is what a convex polygon's depth is (the hull of the eight
-    projected corners gives the same, at three times the cost).
-
-    Args:
-        r: the box's rotation matrix, row-major, 9 values.
-        size: full extents (x, y, z), metres.
-        offset: points relative to the box's centre, metres, world frame, (N, 2).
-
-    Returns:
-        Metres, shape (N,).
-    """
-    axes = [(r[i] * size[i] / 2, r[3 + i] * size[i] / 2) for i in range(3)]
-    normals, reach = [], []
-    for gx, gy in axes:
-        length = math.hypot(gx, gy)
-        if length <= 1e-12:  # seen end-on: no edges of its own
-            continue
-        nx, ny = -gy / length, gx / length
-        normals.append((nx, ny))
-        reach.append(sum(abs(nx * ax + ny * ay) for ax, ay in axes))
-    along = offset @ np.array(normals).T  # (N, K)
-    np.abs(along, out=along)
-    return np.min(np.array(reach) - along, axis=1)
-
 
 def _initial_pose(config: ObjectConfig) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Resting pose of an object: centre (x, y, height / 2) metres, quaternion (x, y, z, w)."""
@@ -1150,36 +1026,3 @@ def _finite(
         expected = " or ".join(str(s) for s in shapes)
         raise ValueError(f"{what} for {name!r} must be finite with shape {expected}, got {value!r}")
     return array.copy()
-
-
-def _convex_hull(points: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Counter-clockwise convex hull of 2D points (Andrew's monotone chain), (M, 2)."""
-    order = np.lexsort((points[:, 1], points[:, 0]))
-    pts = points[order].tolist()
-
-    def half(seq: list[list[float]]) -> list[list[float]]:
-        chain: list[list[float]] = []
-        for p in seq:
-            while len(chain) >= 2:
-                (ax, ay), (bx, by) = chain[-2], chain[-1]
-                if (bx - ax) * (p[1] - ay) - (by - ay) * (p[0] - ax) > 1e-15:
-                    break
-                chain.pop()
-            chain.append(p)
-        return chain
-
-    lower = half(pts)
-    upper = half(pts[::-1])
-    return np.array(lower[:-1] + upper[:-1], dtype=float)
-
-
-def _convex_depth(polygon: NDArray[np.float64], points: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Distance inside a counter-clockwise convex polygon (negative outside), (N,)."""
-    if polygon.shape[0] < 3:
-        return np.full(points.shape[0], -np.inf)
-    edges = np.roll(polygon, -1, axis=0) - polygon
-    lengths = np.hypot(edges[:, 0], edges[:, 1])
-    inward = np.column_stack([-edges[:, 1], edges[:, 0]]) / lengths[:, None]
-    # Distance from each edge line towards the inside; the smallest is the depth.
-    offsets = (points[:, None, :] - polygon[None, :, :]) * inward[None, :, :]
-    return np.min(offsets.sum(axis=2), axis=1)

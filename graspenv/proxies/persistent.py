@@ -42,40 +42,53 @@ paper's plain form: the raw previous contour matched against the tracker's conto
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ProxyConfig
 from graspenv.contacts.matching import correspond_batch
-from graspenv.contacts.resample import bounds_of, owners_of, resample_closed_batch
-from graspenv.contacts.tracking import Contact, ContactFrame
-from graspenv.geometry import rotate
+from graspenv.contacts.resample import bounds_of, gather, resample_kernel
+from graspenv.contacts.tracking import ContactFrame
+from graspenv.jit import njit
 from graspenv.physics.world import PhysicsWorld
-from graspenv.proxies.base import ProxyCommand, rigid_rotation
+from graspenv.proxies.base import ProxyCommand
 
 __all__ = ["PersistentProxies"]
 
 
 @dataclass
-class _Track:
-    """One contact's contour points and the particle stacks that follow them.
+class _Tracks:
+    """Every tracked contact's contour points and the particle stacks that follow
+    them, laid end to end in ascending contact id.
 
     Attributes:
-        points: contour points of the last frame, metres, world frame, shape (N, 2).
-        particles: pool ids, shape (N, L), column 0 at the bottom; a row of -1 for a
+        ids: contact ids, ascending, shape (T,).
+        bounds: track t's points are ``points[bounds[t]:bounds[t + 1]]``, (T + 1,).
+        points: contour points of the last frame, metres, world frame, shape (P, 2).
+        particles: pool ids, shape (P, L), column 0 at the bottom; a row of -1 for a
             culled point (no particle).
-        centroid: the contact's centroid in the last frame, metres, shape (2,).
-        travel: how far any of its points moved in the last frame at most, metres.
-        born: which points got their particle in the last frame, shape (N,).
+        centroids: each contact's centroid in the last frame, metres, shape (T, 2).
+        travel: how far any point of each contact moved in the last frame at most,
+            metres, shape (T,).
+        born: which points got their particle in the last frame, shape (P,).
     """
 
+    ids: NDArray[np.int64]
+    bounds: NDArray[np.intp]
     points: NDArray[np.float64]
     particles: NDArray[np.int64]
-    centroid: NDArray[np.float64]
-    travel: float = 0.0
-    born: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
+    centroids: NDArray[np.float64]
+    travel: NDArray[np.float64]
+    born: NDArray[np.bool_]
+
+    @classmethod
+    def empty(cls, layers: int) -> _Tracks:
+        return cls(
+            np.zeros(0, np.int64), np.zeros(1, np.intp), np.zeros((0, 2)),
+            np.zeros((0, layers), np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros(0, bool),
+        )  # fmt: skip
 
 
 class PersistentProxies:
@@ -104,12 +117,12 @@ class PersistentProxies:
         self._layers = layers
         self._cull = proxy.cull
         self._rise = proxy.stack_spacing * np.arange(self._layers)
-        self._tracks: dict[int, _Track] = {}
+        self._tracks = _Tracks.empty(layers)
         self.hand_turn = 0.0
         """The hand's estimated turn in the last frame, radians."""
 
     def reset(self) -> None:
-        self._tracks = {}
+        self._tracks = _Tracks.empty(self._layers)
         self.hand_turn = 0.0
 
     def particle_contacts(self) -> dict[int, NDArray[np.int64]]:
@@ -124,175 +137,142 @@ class PersistentProxies:
             shape (N·L,); contacts in the order of the last frame. Copies: safe to
             keep.
         """
-        return {
-            cid: track.particles[track.particles[:, 0] >= 0].reshape(-1)
-            for cid, track in self._tracks.items()
-        }
+        tracks = self._tracks
+        result = {}
+        for t, contact_id in enumerate(tracks.ids.tolist()):
+            particles = tracks.particles[tracks.bounds[t] : tracks.bounds[t + 1]]
+            result[contact_id] = particles[particles[:, 0] >= 0].reshape(-1)
+        return result
 
     def update(self, frame: ContactFrame, mask: NDArray[np.uint8]) -> ProxyCommand:
         """Bookkeeping for one frame; ``mask`` is not needed by this method."""
         del mask
-        for contact_id in frame.removed:
-            track = self._tracks.pop(contact_id, None)
-            if track is not None:
-                self._release(track.particles)
-
-        continuing = [c for c in frame.continuing if c.id in self._tracks]
-        turn = 0.0
-        if self._proxy.track_hand_rotation and len(continuing) >= 2:
-            before = np.array([self._tracks[c.id].centroid for c in continuing])
-            after = np.array([c.centroid for c in continuing])
-            turn = rigid_rotation(before, after)
-        self.hand_turn = turn
-
-        followed = self._follow([(self._tracks[c.id], c) for c in continuing], turn)
-        tracks: dict[int, _Track] = {}
-        spins: list[NDArray[np.float64]] = []
-        for contact in frame.contacts:
-            old = self._tracks.pop(contact.id, None)
-            track = followed.get(contact.id)
-            if track is not None:
-                tracks[contact.id] = track
-                spins.append(np.full(len(track.points), turn / self._dt))
-            else:
-                if old is not None:  # a reused id the tracker calls new: start afresh
-                    self._release(old.particles)
-                tracks[contact.id] = self._touch_down(contact)
-                spins.append(np.zeros(len(tracks[contact.id].points)))
-        for leftover in self._tracks.values():  # merged away without being listed
-            self._release(leftover.particles)
-        self._tracks = tracks
-
-        if not tracks:
-            empty = np.zeros((0, self._layers), np.int64)
-            return ProxyCommand(empty, np.zeros((0, 2)), np.zeros(0))
-        particles = np.concatenate([t.particles for t in tracks.values()])
-        targets = np.concatenate([t.points for t in tracks.values()])
-        spin = np.concatenate(spins)
-        born = np.concatenate([t.born for t in tracks.values()])
-        if self._cull or self._proxy.penetration_limit:
-            owner, depth = self._world.footprint_depth(targets)
-        if self._cull:
-            travel = np.repeat(
-                [t.travel for t in tracks.values()], [len(t.points) for t in tracks.values()]
+        proxy, layers, before = self._proxy, self._layers, self._tracks
+        plan = _Plan(
+            *_plan_follow(
+                before.ids, before.bounds, before.points, before.centroids,
+                frame.contact_ids, frame.is_new, frame.centroids, frame.outlines,
+                frame.outline_bounds, frame.contours, frame.contour_bounds,
+                proxy.track_hand_rotation, proxy.predicted_resampling, self._spacing,
             )
-            self._cull_far(particles, targets, depth, travel, born)
-            start = 0
-            for track in tracks.values():  # the tracks keep the culling's changes
-                track.particles = particles[start : start + len(track.points)]
-                start += len(track.points)
-            # The command gets the embodied rows as arrays of its own (the tracks
-            # keep views of ``particles``).
+        )  # fmt: skip
+        # Every track no contact continues gives its particles back: lift-offs,
+        # merges, reused ids.
+        self._release(before.particles[plan.ended_rows])
+        self.hand_turn = plan.turn
+        followed = self._follow(before, plan)
+        tracks = self._touch_down(frame, plan.follows, followed)
+        self._tracks = tracks
+        if len(tracks.points) == 0:
+            empty = np.zeros((0, layers), np.int64)
+            return ProxyCommand(empty, np.zeros((0, 2)), np.zeros(0))
+
+        sizes = np.diff(tracks.bounds)
+        spin = np.repeat(np.where(plan.follows, plan.turn / self._dt, 0.0), sizes)
+        particles, targets, born = tracks.particles, tracks.points, tracks.born
+        if self._cull or proxy.penetration_limit:
+            owner, depth = self._world.footprint_depth(targets)
+        culled = 0
+        if self._cull:
+            # In place: the tracks keep the culling's changes.
+            self._cull_far(particles, targets, depth, np.repeat(tracks.travel, sizes), born)
             embodied = particles[:, 0] >= 0
-            culled = int(np.count_nonzero(~embodied))
+            culled = len(embodied) - int(np.count_nonzero(embodied))
+            # The command gets the embodied rows as arrays of its own.
             particles, targets, spin = particles[embodied], targets[embodied], spin[embodied]
             born = born[embodied]
             owner, depth = owner[embodied], depth[embodied]
         else:
-            culled = 0
-        if self._proxy.penetration_limit:
+            particles, targets, born = particles.copy(), targets.copy(), born.copy()
+        if proxy.penetration_limit:
             self._limit_penetration(particles, targets, owner, depth)
         return ProxyCommand(particles, targets, spin, culled=culled, born=born)
 
     # -- stages ------------------------------------------------------------------------
 
-    def _follow(self, pairs: list[tuple[_Track, Contact]], turn: float) -> dict[int, _Track]:
+    def _follow(self, before: _Tracks, plan: _Plan) -> _Tracks:
         """Continue every continuing contact's track at once (step 3 of the module
-        docstring): one resampling and one matching call for all of them."""
-        if not pairs:
-            return {}
+        docstring): the plan's one resampling, one matching call for all of them,
+        then the particles each current point inherits, starts beside a neighbour
+        or is put down with.
+
+        Returns:
+            The continued tracks, in frame order.
+        """
         proxy, layers = self._proxy, self._layers
-        before = [track for track, _ in pairs]
-        contacts = [contact for _, contact in pairs]
-        previous_bounds = bounds_of([len(t.points) for t in before])
-        points = np.concatenate([t.points for t in before])
-        centroid_before = np.array([t.centroid for t in before])
-        centroid_after = np.array([c.centroid for c in contacts])
-        if proxy.track_hand_rotation or proxy.predicted_resampling:
-            # Where last frame's points should be now: carried by their contact's
-            # centroid and turned by the hand's turn (0 when that estimate is off).
-            sizes = np.diff(previous_bounds)
-            predicted = rotate(points - np.repeat(centroid_before, sizes, axis=0), turn)
-            predicted += np.repeat(centroid_after, sizes, axis=0)
-        else:
-            predicted = points
-        if proxy.predicted_resampling:
-            outlines = np.concatenate([c.outline for c in contacts])
-            current, current_bounds = resample_closed_batch(
-                outlines,
-                bounds_of([len(c.outline) for c in contacts]),
-                self._spacing,
-                predicted[previous_bounds[:-1]],
-            )
-        else:
-            current = np.concatenate([c.contour for c in contacts])
-            current_bounds = bounds_of([len(c.contour) for c in contacts])
+        if plan.contacts.size == 0:
+            return _Tracks.empty(layers)
         match = correspond_batch(
-            predicted,
-            previous_bounds,
-            current,
-            current_bounds,
+            plan.predicted,
+            plan.previous_bounds,
+            plan.current,
+            plan.current_bounds,
             proxy.window,
             proxy.matcher,
             proxy.search,
         )
-
         pool = self._world.pool
-        previous_particles = np.concatenate([t.particles for t in before])
+        previous_particles = before.particles[plan.previous_rows]
         self._release(previous_particles[~match.kept])
-        particles = np.empty((len(current), layers), np.int64)
-        reused = match.predecessor >= 0
-        particles[reused] = previous_particles[match.predecessor[reused]]
-        fresh = np.flatnonzero(~reused)
-        born = np.zeros(len(current), bool)
-        if fresh.size:
-            anchors = match.anchor[fresh]
-            beside = fresh[anchors >= 0]
-            if beside.size:
-                anchor_particles = particles[anchors[anchors >= 0]]
-                # A culled anchor has no particle to start beside: the point stays
-                # culled until the culling gives it one.
-                placed = anchor_particles[:, 0] >= 0
-                ids = pool.acquire(int(placed.sum()) * layers).reshape(-1, layers)
-                pool.place(ids.reshape(-1), pool.positions(anchor_particles[placed].reshape(-1)))
-                particles[beside[placed]] = ids
-                particles[beside[~placed]] = -1
-                born[beside[placed]] = True
-            lost = fresh[anchors < 0]  # in contacts where nothing was kept
-            if lost.size and self._cull:  # the culling puts down what is near
-                particles[lost] = -1
-            elif lost.size:  # put those contours down afresh
-                ids = pool.acquire(lost.size * layers).reshape(lost.size, -1)
-                self._put_down(ids, current[lost])
-                particles[lost] = ids
-                born[lost] = True
-        # The farthest any point of a contact moved: its centroid's step plus the
-        # turn's arc at its farthest point.
-        owner, _ = owners_of(current_bounds)
-        offset = current - centroid_after[owner]
-        reach = np.maximum.reduceat(np.hypot(offset[:, 0], offset[:, 1]), current_bounds[:-1])
-        step = centroid_after - centroid_before
-        travel = np.hypot(step[:, 0], step[:, 1]) + abs(turn) * reach
-        followed = {}
-        for i, contact in enumerate(contacts):
-            lo, hi = current_bounds[i], current_bounds[i + 1]
-            followed[contact.id] = _Track(
-                current[lo:hi],
-                particles[lo:hi],
-                contact.centroid.copy(),
-                float(travel[i]),
-                born[lo:hi],
-            )
-        return followed
+        particles, beside, anchors, lost = _inherit(
+            previous_particles, match.predecessor, match.anchor
+        )
+        born = np.zeros(len(plan.current), bool)
+        if beside.size:
+            ids = pool.acquire(beside.size * layers).reshape(-1, layers)
+            pool.place(ids.reshape(-1), pool.positions(particles[anchors].reshape(-1)))
+            particles[beside] = ids
+            born[beside] = True
+        # Points in contacts where nothing was kept: the culling puts down what is
+        # near, or else those contours are put down afresh.
+        if lost.size and not self._cull:
+            ids = pool.acquire(lost.size * layers).reshape(lost.size, -1)
+            self._put_down(ids, plan.current[lost])
+            particles[lost] = ids
+            born[lost] = True
+        return _Tracks(
+            plan.ids, plan.current_bounds, plan.current, particles, plan.centroids,
+            plan.travel, born,
+        )  # fmt: skip
 
-    def _touch_down(self, contact: Contact) -> _Track:
-        points = np.array(contact.contour)
+    def _touch_down(
+        self, frame: ContactFrame, follows: NDArray[np.bool_], followed: _Tracks
+    ) -> _Tracks:
+        """All of the frame's tracks, in ascending id: the ``followed`` ones and a
+        new one for every other contact (step 4), put down by ray casting unless the
+        culling will do it."""
+        new = np.flatnonzero(~follows)
+        if new.size == 0:
+            return followed
+        points, bounds = gather(frame.contours, frame.contour_bounds, new)
         if self._cull:  # the culling puts down the points that are near an object
-            culled = np.full((len(points), self._layers), -1)
-            return _Track(points, culled, contact.centroid.copy(), born=np.zeros(len(points), bool))
-        ids = self._world.pool.acquire(len(points) * self._layers).reshape(len(points), -1)
-        self._put_down(ids, points)
-        return _Track(points, ids, contact.centroid.copy(), born=np.ones(len(points), bool))
+            particles = np.full((len(points), self._layers), -1, np.int64)
+            born = np.zeros(len(points), bool)
+        else:
+            particles = self._world.pool.acquire(len(points) * self._layers)
+            particles = particles.reshape(len(points), -1)
+            self._put_down(particles, points)
+            born = np.ones(len(points), bool)
+        if followed.ids.size == 0:
+            return _Tracks(
+                frame.contact_ids[new], bounds, points, particles,
+                frame.centroids[new].copy(), np.zeros(new.size), born,
+            )  # fmt: skip
+        # Both kinds together, then in the frame's (ascending id) order.
+        both_bounds = bounds_of(np.concatenate([np.diff(followed.bounds), np.diff(bounds)]))
+        order = np.argsort(np.concatenate([np.flatnonzero(follows), new]), kind="stable")
+        rows_points, tracks_bounds = gather(
+            np.concatenate([followed.points, points]), both_bounds, order
+        )
+        return _Tracks(
+            frame.contact_ids.copy(),
+            tracks_bounds,
+            rows_points,
+            gather(np.concatenate([followed.particles, particles]), both_bounds, order)[0],
+            frame.centroids.copy(),
+            np.concatenate([followed.travel, np.zeros(new.size)])[order],
+            gather(np.concatenate([followed.born, born]), both_bounds, order)[0],
+        )
 
     def _release(self, particles: NDArray[np.int64]) -> None:
         """Give back the particles of some rows of a track (culled rows have none)."""
@@ -369,3 +349,192 @@ class PersistentProxies:
         world.pool.place(
             particles[rows].reshape(-1), self._stack_positions(targets[rows], top[below])
         )
+
+
+@dataclass(frozen=True, eq=False)
+class _Plan:
+    """What a frame's continuing contacts need, from :func:`_plan_follow`.
+
+    Attributes:
+        follows: which contacts of the frame continue a track, shape (C,).
+        ended_rows: rows of the tracks no contact continues, (E,).
+        turn: the hand's turn this frame, radians.
+        contacts: the following contacts (frame indices), (F,).
+        ids: their ids, (F,).
+        centroids: their centroids now, metres, (F, 2).
+        previous_rows: the rows of their tracks' last points, (P,).
+        previous_bounds: those points' bounds per contact, (F + 1,).
+        predicted: where the last points should be now, metres, (P, 2).
+        current: the current contours (resampled from the predicted first points, or
+            the tracker's), metres, (Q, 2).
+        current_bounds: (F + 1,).
+        travel: how far any point of each moved this frame at most, metres, (F,).
+    """
+
+    follows: NDArray[np.bool_]
+    ended_rows: NDArray[np.intp]
+    turn: float
+    contacts: NDArray[np.intp]
+    ids: NDArray[np.int64]
+    centroids: NDArray[np.float64]
+    previous_rows: NDArray[np.intp]
+    previous_bounds: NDArray[np.intp]
+    predicted: NDArray[np.float64]
+    current: NDArray[np.float64]
+    current_bounds: NDArray[np.intp]
+    travel: NDArray[np.float64]
+
+
+@njit
+def _plan_follow(
+    track_ids: NDArray[np.int64],
+    track_bounds: NDArray[np.intp],
+    track_points: NDArray[np.float64],
+    track_centroids: NDArray[np.float64],
+    ids: NDArray[np.int64],
+    is_new: NDArray[np.bool_],
+    centroids: NDArray[np.float64],
+    outlines: NDArray[np.float64],
+    outline_bounds: NDArray[np.intp],
+    contours: NDArray[np.float64],
+    contour_bounds: NDArray[np.intp],
+    track_hand_rotation: bool,
+    predicted_resampling: bool,
+    spacing: float,
+) -> tuple[
+    NDArray[np.bool_],
+    NDArray[np.intp],
+    float,
+    NDArray[np.intp],
+    NDArray[np.int64],
+    NDArray[np.float64],
+    NDArray[np.intp],
+    NDArray[np.intp],
+    NDArray[np.float64],
+    NDArray[np.float64],
+    NDArray[np.intp],
+    NDArray[np.float64],
+]:
+    """The fields of :class:`_Plan` (steps 2 and 3 of the module docstring up to the
+    matching)."""
+    count = len(ids)
+    # Which track each contact continues: the same id, not new this frame.
+    follows = np.zeros(count, np.bool_)
+    track = np.full(count, -1, np.intp)
+    ended = np.ones(len(track_ids), np.bool_)
+    for c in range(count):
+        t = np.searchsorted(track_ids, ids[c])
+        if not is_new[c] and t < len(track_ids) and track_ids[t] == ids[c]:
+            follows[c] = True
+            track[c] = t
+            ended[t] = False
+    contacts = np.flatnonzero(follows)
+    continued = track[contacts]
+    ended_rows = _rows(track_bounds, np.flatnonzero(ended))
+    previous_rows = _rows(track_bounds, continued)
+    previous_bounds = np.zeros(len(contacts) + 1, np.intp)
+    for k in range(len(contacts)):
+        t = continued[k]
+        previous_bounds[k + 1] = previous_bounds[k] + track_bounds[t + 1] - track_bounds[t]
+    before = track_centroids[continued]
+    after = centroids[contacts]
+    turn = 0.0
+    if track_hand_rotation and len(contacts) >= 2:
+        turn = _rotation(before, after)
+    # Where last frame's points should be now: carried by their contact's centroid and
+    # turned by the hand's turn (0 when that estimate is off).
+    predicted = track_points[previous_rows]
+    if track_hand_rotation or predicted_resampling:
+        cos, sin = np.cos(turn), np.sin(turn)
+        for k in range(len(contacts)):
+            for i in range(previous_bounds[k], previous_bounds[k + 1]):
+                x = predicted[i, 0] - before[k, 0]
+                y = predicted[i, 1] - before[k, 1]
+                predicted[i, 0] = (x * cos - y * sin) + after[k, 0]
+                predicted[i, 1] = (x * sin + y * cos) + after[k, 1]
+    if predicted_resampling:
+        chosen, chosen_bounds = gather(outlines, outline_bounds, contacts)
+        starts = predicted[previous_bounds[:-1]]
+        current, current_bounds = resample_kernel(chosen, chosen_bounds, spacing, starts)
+    else:
+        current, current_bounds = gather(contours, contour_bounds, contacts)
+    # The farthest any point of a contact moved: its centroid's step plus the turn's
+    # arc at its farthest point.
+    travel = np.empty(len(contacts))
+    for k in range(len(contacts)):
+        reach = 0.0
+        for i in range(current_bounds[k], current_bounds[k + 1]):
+            reach = max(reach, np.hypot(current[i, 0] - after[k, 0], current[i, 1] - after[k, 1]))
+        step = np.hypot(after[k, 0] - before[k, 0], after[k, 1] - before[k, 1])
+        travel[k] = step + abs(turn) * reach
+    return (
+        follows, ended_rows, turn, contacts, ids[contacts], after, previous_rows,
+        previous_bounds, predicted, current, current_bounds, travel,
+    )  # fmt: skip
+
+
+@njit
+def _rows(bounds: NDArray[np.intp], tracks: NDArray[np.intp]) -> NDArray[np.intp]:
+    """The point rows of some tracks, in their order."""
+    total = 0
+    for t in tracks:
+        total += bounds[t + 1] - bounds[t]
+    rows = np.empty(total, np.intp)
+    n = 0
+    for t in tracks:
+        for i in range(bounds[t], bounds[t + 1]):
+            rows[n] = i
+            n += 1
+    return rows
+
+
+@njit
+def _rotation(before: NDArray[np.float64], after: NDArray[np.float64]) -> float:
+    """:func:`graspenv.proxies.base.rigid_rotation`, compiled."""
+    n = len(before)
+    bx, by, ax, ay = 0.0, 0.0, 0.0, 0.0
+    for i in range(n):
+        bx += before[i, 0]
+        by += before[i, 1]
+        ax += after[i, 0]
+        ay += after[i, 1]
+    bx, by, ax, ay = bx / n, by / n, ax / n, ay / n
+    cross, dot = 0.0, 0.0
+    for i in range(n):
+        px, py = before[i, 0] - bx, before[i, 1] - by
+        qx, qy = after[i, 0] - ax, after[i, 1] - ay
+        cross += px * qy - py * qx
+        dot += px * qx + py * qy
+    if cross == 0.0 and dot == 0.0:
+        return 0.0
+    return float(np.arctan2(cross, dot))
+
+
+@njit
+def _inherit(
+    previous: NDArray[np.int64], predecessor: NDArray[np.intp], anchor: NDArray[np.intp]
+) -> tuple[NDArray[np.int64], NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
+    """The particle stacks current points inherit (step 3 of the module docstring).
+
+    Returns:
+        (particles, beside, anchors, lost): each current point's predecessor's stack,
+        or -1 rows, (Q, L); the new points that start beside an anchor that has a
+        particle, and those anchors (a culled anchor has none to start beside: its
+        point stays culled until the culling gives it one); and the new points in
+        contacts where nothing was kept.
+    """
+    particles = np.full((len(predecessor), previous.shape[1]), -1, np.int64)
+    beside = np.zeros(len(predecessor), np.bool_)
+    lost = np.zeros(len(predecessor), np.bool_)
+    for j in range(len(predecessor)):
+        if predecessor[j] >= 0:
+            particles[j] = previous[predecessor[j]]
+    for j in range(len(predecessor)):
+        if predecessor[j] >= 0:
+            continue
+        if anchor[j] < 0:
+            lost[j] = True
+        elif particles[anchor[j], 0] >= 0:
+            beside[j] = True
+    rows = np.flatnonzero(beside)
+    return particles, rows, anchor[rows], np.flatnonzero(lost)

@@ -360,8 +360,9 @@ class ParticlePool:
                 useMaximalCoordinates=True,
                 physicsClientId=self._client,
             )
-            # A batch creation only tells the client about its last body.
-            pb.syncBodyInfo(physicsClientId=self._client)
+            # A batch creation tells the client only about its last body; every call
+            # the pool makes goes to the server by id and needs no more (a sync costs
+            # 4-6 ms, most of a rebuild). PhysicsWorld.num_bodies syncs when asked.
             bodies = np.asarray(created, dtype=np.int64).reshape(-1)
             self._particle_of_body.update({b: start + i for i, b in enumerate(bodies.tolist())})
             for body in bodies.tolist():
@@ -374,14 +375,23 @@ class ParticlePool:
                 [self._velocity_step, np.full(bodies.size, -1, dtype=np.int64)]
             )
             self._last_target = np.concatenate([self._last_target, park[:, :2]])
-            self._park(slots)
+            # Created parked (at rest on the park grid, asleep): only the collision
+            # mask is left to clear.
+            for body in bodies.tolist():
+                pb.setCollisionFilterGroupMask(
+                    body, -1, PARTICLE_GROUP, 0, physicsClientId=self._client
+                )
 
     def _configure(self, body: int) -> None:
+        """A new body's dynamics, in one call (PyBullet applies each setting on its
+        own, whatever else the call sets): a parked particle's, asleep."""
         c = self._client
         proxy, physics = self._proxy, self._physics
         # mass= must come with localInertiaDiagonal: without it PyBullet sets the mass
         # of a maximal-coordinate body to zero and its positions become NaN.
         # A zero inertia diagonal is Bullet's "infinite inertia" (zero inverse).
+        # Bullet also sets the CCD motion threshold to half the swept radius.
+        ccd = {"ccdSweptSphereRadius": proxy.particle_radius} if physics.ccd else {}
         pb.changeDynamics(
             body,
             -1,
@@ -394,13 +404,10 @@ class ParticlePool:
             linearDamping=0.0,
             angularDamping=0.0,
             anisotropicFriction=_PLANAR_FRICTION,
+            activationState=pb.ACTIVATION_STATE_SLEEP,
             physicsClientId=c,
+            **ccd,
         )
-        if physics.ccd:
-            # Bullet also sets the CCD motion threshold to half this radius.
-            pb.changeDynamics(
-                body, -1, ccdSweptSphereRadius=proxy.particle_radius, physicsClientId=c
-            )
 
     def _park_positions(self, ids: NDArray[np.int64]) -> NDArray[np.float64]:
         ids = np.asarray(ids)

@@ -326,6 +326,8 @@ class PhysicsWorld:
     @property
     def num_bodies(self) -> int:
         """Number of Bullet bodies (table, floor, objects, pooled particles)."""
+        # The client learns of batch-created bodies only from a sync (ParticlePool).
+        pb.syncBodyInfo(physicsClientId=self.client)
         return int(pb.getNumBodies(physicsClientId=self.client))
 
     # -- objects ---------------------------------------------------------------------

@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from graspenv.jit import njit
 from graspenv.surface.geometry import Surface
 from graspenv.surface.hand import Hand
 from graspenv.surface.noise import SensorNoise
@@ -82,58 +83,128 @@ def _on_table(shapes: list[ContactShape], surface: Surface) -> list[ContactShape
     return [shape for shape, gap in zip(shapes, reach, strict=True) if gap < _MARGIN]
 
 
-def _repeated_vertices(
-    polygons: NDArray[np.float64], counts: NDArray[np.intp]
-) -> NDArray[np.bool_] | None:
-    """Which vertices coincide (to 1e-6 px) with the next of their polygon; None if
-    none do."""
-    following = np.arange(1, len(polygons) + 1)
-    ends = np.cumsum(counts)[counts > 0]
-    following[ends - 1] = ends - counts[counts > 0]
-    repeated = np.abs(polygons[following] - polygons).max(axis=1) <= 1e-6
-    return repeated if repeated.any() else None
+@njit
+def _inset_polygons(
+    pixels: NDArray[np.float64],
+    counts: NDArray[np.intp],
+    distance: float,
+    margin: int,
+    width: int,
+    height: int,
+    scale: float,
+) -> tuple[NDArray[np.int32], NDArray[np.intp], NDArray[np.int64]]:
+    """Every shape's outline (pixels (column, row), laid end to end, ``counts[i]``
+    vertices each) moved inward by ``distance`` (miter joins), in fixed point.
 
-
-def _inset(
-    polygons: NDArray[np.float64], starts: NDArray[np.intp], distance: float
-) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """Move the edges of closed polygons inward by ``distance`` (miter joins).
-
-    Args:
-        polygons: the vertices of all polygons, one after the other, shape (N, 2).
-        starts: index of each polygon's first vertex, increasing, shape (K,).
-        distance: how far to move each edge, in the units of ``polygons``.
+    A vertex that coincides (to 1e-6 px) with the next has no edge normal, so it is
+    dropped first (the inset would leave its corner put), and outlines of fewer than
+    three vertices cover nothing. A polygon whose orientation flips is thinner than
+    the inset and is dropped too.
 
     Returns:
-        the moved vertices, shape (N, 2), and for each polygon whether it survived
-        (False when it is empty or too thin: its orientation flips), shape (K,).
+        (polygons, bounds, boxes): each polygon's vertices relative to its region's
+        top-left pixel times ``scale``, rounded, int32, laid end to end with bounds;
+        and each region (c0, r0, c1, r1) on the image with ``margin`` pixels around
+        the polygon, -1 rows for polygons not drawn.
     """
-    n = len(polygons)
-    ends = np.append(starts[1:], n)
-    following = np.arange(1, n + 1)
-    following[ends - 1] = starts
-    preceding = np.arange(-1, n - 1)
-    preceding[starts] = ends - 1
+    count = len(counts)
+    starts = np.zeros(count + 1, np.intp)
+    starts[1:] = np.cumsum(counts)
+    keep = np.zeros(len(pixels), np.bool_)
+    sizes = np.zeros(count, np.intp)
+    for c in range(count):
+        lo, hi = starts[c], starts[c + 1]
+        for i in range(lo, hi):
+            j = i + 1 if i + 1 < hi else lo
+            gap = max(abs(pixels[j, 0] - pixels[i, 0]), abs(pixels[j, 1] - pixels[i, 1]))
+            keep[i] = gap > 1e-6
+            sizes[c] += keep[i]
+    bounds = np.zeros(count + 1, np.intp)
+    bounds[1:] = np.cumsum(sizes)
+    points = pixels[keep]
+    moved = np.empty_like(points)
+    boxes = np.full((count, 4), -1, np.int64)
+    out = np.empty((len(points), 2), np.int32)
+    floor_scale = 2.0 / _MITER_LIMIT**2
+    for c in range(count):
+        lo, hi = bounds[c], bounds[c + 1]
+        n = hi - lo
+        if n < 3:
+            continue
+        area = 0.0
+        for i in range(lo, hi):
+            j = i + 1 if i + 1 < hi else lo
+            area += points[i, 0] * points[j, 1] - points[j, 0] * points[i, 1]
+        # For a positive (counter-clockwise in x-right, y-up terms) polygon the
+        # outward normal is the tangent turned clockwise; the sign of the area covers
+        # both.
+        for i in range(lo, hi):
+            j = i + 1 if i + 1 < hi else lo
+            before = i - 1 if i > lo else hi - 1
+            ex, ey = points[j, 0] - points[i, 0], points[j, 1] - points[i, 1]
+            bx, by = points[i, 0] - points[before, 0], points[i, 1] - points[before, 1]
+            length = np.hypot(ex, ey)
+            before_length = np.hypot(bx, by)
+            sign = np.sign(area) / (length if length > 0.0 else 1.0)
+            before_sign = np.sign(area) / (before_length if before_length > 0.0 else 1.0)
+            ox, oy = ey * sign, -ex * sign
+            ix, iy = by * before_sign, -bx * before_sign
+            spread = 1.0 + (ox * ix + oy * iy)
+            step = distance / max(spread, floor_scale)
+            moved[i, 0] = points[i, 0] - (ox + ix) * step
+            moved[i, 1] = points[i, 1] - (oy + iy) * step
+        moved_area = 0.0
+        for i in range(lo, hi):
+            j = i + 1 if i + 1 < hi else lo
+            moved_area += moved[i, 0] * moved[j, 1] - moved[j, 0] * moved[i, 1]
+        if not area * moved_area > 0.0:
+            continue  # thinner than the inset
+        c0 = max(int(np.floor(moved[lo:hi, 0].min())) - margin, 0)
+        r0 = max(int(np.floor(moved[lo:hi, 1].min())) - margin, 0)
+        c1 = min(int(np.ceil(moved[lo:hi, 0].max())) + margin, width - 1)
+        r1 = min(int(np.ceil(moved[lo:hi, 1].max())) + margin, height - 1)
+        if c0 > c1 or r0 > r1:
+            continue  # wholly off the table
+        boxes[c, 0], boxes[c, 1], boxes[c, 2], boxes[c, 3] = c0, r0, c1, r1
+        # Coordinates relative to the region; OpenCV clips what falls outside.
+        for i in range(lo, hi):
+            out[i, 0] = np.int32(np.round((moved[i, 0] - c0) * scale))
+            out[i, 1] = np.int32(np.round((moved[i, 1] - r0) * scale))
+    return out, bounds, boxes
 
-    def doubled_areas(points: NDArray[np.float64]) -> NDArray[np.float64]:
-        x, y = points[:, 0], points[:, 1]
-        cross = x * y[following] - x[following] * y
-        result: NDArray[np.float64] = np.add.reduceat(cross, starts)
-        return result
 
-    area = doubled_areas(polygons)
-    edge = polygons[following] - polygons
-    length = np.hypot(edge[:, 0], edge[:, 1])
-    # For a positive (counter-clockwise in x-right, y-up terms) polygon the outward
-    # normal is the tangent turned clockwise; the sign of the area covers both.
-    sign = np.repeat(np.sign(area), ends - starts) / np.where(length > 0.0, length, 1.0)
-    outward = np.stack([edge[:, 1] * sign, -edge[:, 0] * sign], axis=-1)
-    incoming = outward[preceding]
-    total = outward + incoming
-    scale = 1.0 + np.einsum("ij,ij->i", outward, incoming)
-    moved = polygons - total * (distance / np.maximum(scale, 2.0 / _MITER_LIMIT**2))[:, None]
-    survived = (area * doubled_areas(moved) > 0.0) & (ends > starts)
-    return moved, survived
+def _draw(
+    hand_or_shapes: Hand | ContactShape | Iterable[ContactShape],
+    surface: Surface,
+    threshold: bool,
+) -> NDArray[np.uint8]:
+    """The anti-aliased fill of every touching shape, union by maximum, each region
+    thresholded at one half first when ``threshold`` (the same mask as thresholding
+    the union, since a threshold keeps the order of values)."""
+    height, width = surface.shape
+    image = np.zeros((height, width), dtype=np.uint8)
+    shapes = _on_table(_shapes_of(hand_or_shapes), surface)
+    if not shapes:
+        return image
+    max_segment = _MAX_SEGMENT_PX * float(surface.pixel_size.min())
+    outlines = [shape.outline(max_segment) for shape in shapes]
+    counts = np.array([len(outline) for outline in outlines], dtype=np.intp)
+    # One conversion and one compiled inset for all shapes: per-call overhead
+    # dominates here.
+    pixels = surface.world_to_pixel(np.concatenate(outlines))
+    polygons, bounds, boxes = _inset_polygons(
+        pixels, counts, AA_EDGE_BIAS, _MARGIN, width, height, float(1 << _SHIFT)
+    )
+    for i, (c0, r0, c1, r1) in enumerate(boxes.tolist()):
+        if c0 < 0:
+            continue
+        region = np.zeros((r1 - r0 + 1, c1 - c0 + 1), dtype=np.uint8)
+        cv2.fillPoly(region, [polygons[bounds[i] : bounds[i + 1]]], 255, cv2.LINE_AA, _SHIFT)
+        if threshold:
+            cv2.threshold(region, 127, 255, cv2.THRESH_BINARY, dst=region)
+        window = image[r0 : r1 + 1, c0 : c1 + 1]
+        np.maximum(window, region, out=window)
+    return image
 
 
 def render_coverage(
@@ -155,45 +226,7 @@ def render_coverage(
         ValueError: an item is not a ContactShape, or a shape that reaches the table
             spans more than 65 536 pixels from its centre.
     """
-    height, width = surface.shape
-    coverage = np.zeros((height, width), dtype=np.uint8)
-    shapes = _on_table(_shapes_of(hand_or_shapes), surface)
-    if not shapes:
-        return coverage
-    max_segment = _MAX_SEGMENT_PX * float(surface.pixel_size.min())
-    outlines = [shape.outline(max_segment) for shape in shapes]
-    counts = np.array([len(outline) for outline in outlines])
-    # One conversion and one inset for all shapes: per-call overhead dominates here.
-    pixels = surface.world_to_pixel(np.concatenate(outlines))
-    repeated = _repeated_vertices(pixels, counts)
-    if repeated is not None:
-        # A zero-length edge has no normal, so the inset would leave its corner put.
-        owner = np.repeat(np.arange(len(counts)), counts)
-        pixels, counts = pixels[~repeated], np.bincount(owner[~repeated], minlength=len(counts))
-    drawable = counts >= 3
-    if not drawable.all():
-        # Degenerate outlines would make reduceat misbehave; they cover nothing anyway.
-        pixels, counts = pixels[np.repeat(drawable, counts)], counts[drawable]
-        if len(counts) == 0:
-            return coverage
-    starts = np.cumsum(counts) - counts
-    pixels, survived = _inset(pixels, starts, AA_EDGE_BIAS)
-    low = np.floor(np.minimum.reduceat(pixels, starts)).astype(int) - _MARGIN
-    high = np.ceil(np.maximum.reduceat(pixels, starts)).astype(int) + _MARGIN
-    low = np.maximum(low, 0)
-    high = np.minimum(high, (width - 1, height - 1))
-    scale = float(1 << _SHIFT)
-    for i in range(len(counts)):
-        (c0, r0), (c1, r1) = low[i].tolist(), high[i].tolist()
-        if not survived[i] or c0 > c1 or r0 > r1:
-            continue  # thinner than the inset, or wholly off the table
-        # Coordinates relative to the clipped region; OpenCV clips what falls outside.
-        relative = (pixels[starts[i] : starts[i] + counts[i]] - (c0, r0)) * scale
-        region = np.zeros((r1 - r0 + 1, c1 - c0 + 1), dtype=np.uint8)
-        cv2.fillPoly(region, [np.round(relative).astype(np.int32)], 255, cv2.LINE_AA, _SHIFT)
-        window = coverage[r0 : r1 + 1, c0 : c1 + 1]
-        np.maximum(window, region, out=window)
-    return coverage
+    return _draw(hand_or_shapes, surface, threshold=False)
 
 
 def render_mask(
@@ -222,9 +255,9 @@ def render_mask(
         ValueError: an item is not a ContactShape, or ``rng`` is missing for random
             noise.
     """
-    mask = render_coverage(hand_or_shapes, surface)
-    # In place: a freshly allocated full-frame output costs more than the drawing.
-    cv2.threshold(mask, 127, 255, cv2.THRESH_BINARY, dst=mask)
+    # Each drawn region is thresholded on its own: the whole frame would cost more
+    # than the drawing.
+    mask = _draw(hand_or_shapes, surface, threshold=True)
     if noise is not None and noise.enabled:
         return noise.apply(mask, rng)
     return mask

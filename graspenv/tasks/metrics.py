@@ -53,6 +53,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from graspenv.geometry import tilt_angle
+from graspenv.jit import njit
 
 __all__ = [
     "ContactArrays",
@@ -276,16 +277,39 @@ def _epsilon_of_wrenches(wrenches: NDArray[np.float64]) -> float:
     0 when the origin is not strictly inside (or the hull is flat).
     """
     tol = _RELATIVE_TOLERANCE * max(1.0, float(np.max(np.abs(wrenches))))
-    facets = _convex_hull_normals(_torque_extremes(wrenches, tol), tol)
-    if facets is None:
+    extremes = _torque_extremes(np.ascontiguousarray(wrenches, dtype=np.float64), tol)
+    facets, status = _convex_hull_normals(extremes, tol)
+    if status == _FLAT:
         return 0.0
+    if status == _BROKEN:
+        fallback = _facet_normals_by_enumeration(extremes, tol)
+        if fallback is None:
+            return 0.0
+        facets = fallback
     # The support value at each outward facet normal is that facet plane's distance
     # from the origin (negative when the origin is beyond it).
-    support = np.max(wrenches @ facets.T, axis=0)
-    epsilon = float(np.min(support))
+    epsilon = _smallest_support(np.ascontiguousarray(wrenches, dtype=np.float64), facets)
     return epsilon if epsilon > tol else 0.0
 
 
+@njit
+def _smallest_support(wrenches: NDArray[np.float64], facets: NDArray[np.float64]) -> float:
+    """min over facet normals n of max over wrenches w of w · n."""
+    smallest = np.inf
+    for f in range(len(facets)):
+        largest = -np.inf
+        for w in range(len(wrenches)):
+            value = (
+                wrenches[w, 0] * facets[f, 0]
+                + wrenches[w, 1] * facets[f, 1]
+                + wrenches[w, 2] * facets[f, 2]
+            )
+            largest = max(largest, value)
+        smallest = min(smallest, largest)
+    return float(smallest)
+
+
+@njit
 def _torque_extremes(wrenches: NDArray[np.float64], tol: float) -> NDArray[np.float64]:
     """The wrenches that can be hull vertices among those sharing a force.
 
@@ -293,17 +317,25 @@ def _torque_extremes(wrenches: NDArray[np.float64], tol: float) -> NDArray[np.fl
     vertical line in (f_x, f_y, τ/ρ), so all but the two torque extremes are convex
     combinations of those two and leave the hull unchanged. Forces are compared on a
     grid of spacing ``tol``: points a rounding apart count as one line, which moves
-    the hull by at most ``tol``.
+    the hull by at most ``tol``. The result runs line by line (forces in
+    lexicographic order of their grid cells), lowest torque first.
     """
-    key = np.round(wrenches[:, :2] / tol).astype(np.int64)
-    _, line = np.unique(key, axis=0, return_inverse=True)
-    line = line.reshape(-1)
-    order = np.lexsort((wrenches[:, 2], line))
-    first = np.ones(len(order), dtype=bool)
-    first[1:] = line[order[1:]] != line[order[:-1]]
-    last = np.ones(len(order), dtype=bool)
-    last[:-1] = first[1:]
-    return wrenches[order[first | last]]
+    n = len(wrenches)
+    kx = np.empty(n, np.int64)
+    ky = np.empty(n, np.int64)
+    for i in range(n):
+        kx[i] = np.int64(np.round(wrenches[i, 0] / tol))
+        ky[i] = np.int64(np.round(wrenches[i, 1] / tol))
+    order = np.argsort(wrenches[:, 2], kind="mergesort")
+    order = order[np.argsort(ky[order], kind="mergesort")]
+    order = order[np.argsort(kx[order], kind="mergesort")]
+    keep = np.zeros(n, np.bool_)
+    for r in range(n):
+        i = order[r]
+        first = r == 0 or kx[order[r - 1]] != kx[i] or ky[order[r - 1]] != ky[i]
+        last = r == n - 1 or kx[order[r + 1]] != kx[i] or ky[order[r + 1]] != ky[i]
+        keep[r] = first or last
+    return wrenches[order[keep]]
 
 
 def _cross(u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -317,125 +349,176 @@ def _cross(u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64
     )
 
 
-def _plane_normals(
-    points: NDArray[np.float64], faces: NDArray[np.intp]
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Unit normals ``(b − a) × (c − a)`` of triangles (F, 3) and their offsets n·a."""
-    a, b, c = points[faces[:, 0]], points[faces[:, 1]], points[faces[:, 2]]
-    normal = _cross(b - a, c - a)
-    normal /= np.sqrt(np.einsum("ij,ij->i", normal, normal))[:, None]
-    return normal, np.einsum("ij,ij->i", normal, a)
+# _convex_hull_normals' outcomes: a hull; points spanning less than three dimensions;
+# a hull that failed its final check (floating point broke the construction).
+_HULL, _FLAT, _BROKEN = 0, 1, 2
 
 
-def _fan_plane(
-    a: list[float], b: list[float], apex: list[float]
+@njit
+def _plane(
+    points: NDArray[np.float64], a: int, b: int, c: int
 ) -> tuple[float, float, float, float]:
-    """Unit normal ``(b − a) × (apex − a)`` and offset of one new facet, as floats.
-
-    The normal is NaN for a degenerate triangle, which fails the hull's final check.
-    """
-    ux, uy, uz = b[0] - a[0], b[1] - a[1], b[2] - a[2]
-    vx, vy, vz = apex[0] - a[0], apex[1] - a[1], apex[2] - a[2]
+    """Unit normal ``(b − a) × (c − a)`` and offset n·a of one triangle; NaN for a
+    degenerate one (which fails the hull's final check)."""
+    ux = points[b, 0] - points[a, 0]
+    uy = points[b, 1] - points[a, 1]
+    uz = points[b, 2] - points[a, 2]
+    vx = points[c, 0] - points[a, 0]
+    vy = points[c, 1] - points[a, 1]
+    vz = points[c, 2] - points[a, 2]
     nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
-    length = math.sqrt(nx * nx + ny * ny + nz * nz)
+    length = np.sqrt(nx * nx + ny * ny + nz * nz)
     if length == 0.0:
-        return (math.nan, math.nan, math.nan, math.nan)
+        return np.nan, np.nan, np.nan, np.nan
     nx, ny, nz = nx / length, ny / length, nz / length
-    return (nx, ny, nz, nx * a[0] + ny * a[1] + nz * a[2])
+    return nx, ny, nz, nx * points[a, 0] + ny * points[a, 1] + nz * points[a, 2]
 
 
-def _convex_hull_normals(points: NDArray[np.float64], tol: float) -> NDArray[np.float64] | None:
+@njit
+def _convex_hull_normals(
+    points: NDArray[np.float64], tol: float
+) -> tuple[NDArray[np.float64], int]:
     """Outward unit normals of the facets of the convex hull of 3-D points, (F, 3).
 
     Incremental construction: a starting tetrahedron of far-apart points, then each
     remaining point (farthest from the centroid first, so more of the later ones fall
-    inside and cost one matrix-vector product) replaces the facets it sees by a fan
-    from their horizon to itself. Points within ``tol`` of a facet plane count as on
-    it, so coplanar and collinear points add nothing.
+    inside) replaces the facets it sees by a fan from their horizon to itself. Points
+    within ``tol`` of a facet plane count as on it, so coplanar and collinear points
+    add nothing.
 
     Returns:
-        The facet normals (coplanar facets may repeat a plane), or None when the
-        points span less than three dimensions (beyond ``tol``).
+        (normals, status): the facet normals (coplanar facets may repeat a plane) and
+        ``_HULL``; or no normals and ``_FLAT`` when the points span less than three
+        dimensions (beyond ``tol``), or ``_BROKEN`` when the hull fails its check.
     """
-    count = points.shape[0]
+    count = len(points)
+    none = np.zeros((0, 3))
     if count < 4:
-        return None
-    spread = np.linalg.norm(points - points.mean(axis=0), axis=1)
+        return none, _FLAT
+    centre = np.zeros(3)
+    for i in range(count):
+        centre += points[i]
+    centre /= count
+    spread = np.empty(count)
+    for i in range(count):
+        spread[i] = np.linalg.norm(points[i] - centre)
     i0 = int(np.argmax(spread))
-    i1 = int(np.argmax(np.linalg.norm(points - points[i0], axis=1)))
+    far = np.empty(count)
+    for i in range(count):
+        far[i] = np.linalg.norm(points[i] - points[i0])
+    i1 = int(np.argmax(far))
     axis = points[i1] - points[i0]
-    if np.linalg.norm(axis) <= tol:
-        return None
-    from_i0 = points - points[i0]
-    off_line = np.linalg.norm(_cross(from_i0, np.broadcast_to(axis, from_i0.shape)), axis=1)
-    off_line /= np.linalg.norm(axis)
+    axis_length = np.linalg.norm(axis)
+    if axis_length <= tol:
+        return none, _FLAT
+    off_line = np.empty(count)
+    for i in range(count):
+        off_line[i] = np.linalg.norm(np.cross(points[i] - points[i0], axis)) / axis_length
     i2 = int(np.argmax(off_line))
     if off_line[i2] <= tol:
-        return None
-    plane = _cross(axis[None, :], (points[i2] - points[i0])[None, :])[0]
-    height = from_i0 @ (plane / np.linalg.norm(plane))
+        return none, _FLAT
+    plane = np.cross(axis, points[i2] - points[i0])
+    plane /= np.linalg.norm(plane)
+    height = np.empty(count)
+    for i in range(count):
+        height[i] = np.dot(points[i] - points[i0], plane)
     i3 = int(np.argmax(np.abs(height)))
     if abs(height[i3]) <= tol:
-        return None
+        return none, _FLAT
 
     # Facets live in preallocated rows; a replaced facet is marked dead, not removed.
-    capacity = 8 * count
-    faces = np.zeros((capacity, 3), dtype=np.intp)
+    capacity = 8 * count + 8
+    faces = np.zeros((capacity, 3), np.intp)
     normals = np.zeros((capacity, 3))
     offsets = np.zeros(capacity)
-    alive = np.zeros(capacity, dtype=bool)
+    alive = np.zeros(capacity, np.bool_)
+    interior = (points[i0] + points[i1] + points[i2] + points[i3]) / 4.0
+    start = ((i0, i1, i2), (i0, i1, i3), (i0, i2, i3), (i1, i2, i3))
+    for f in range(4):
+        a, b, c = start[f]
+        nx, ny, nz, off = _plane(points, a, b, c)
+        if nx * interior[0] + ny * interior[1] + nz * interior[2] - off > 0.0:
+            b, c = c, b
+            nx, ny, nz, off = -nx, -ny, -nz, -off
+        faces[f, 0], faces[f, 1], faces[f, 2] = a, b, c
+        normals[f, 0], normals[f, 1], normals[f, 2], offsets[f] = nx, ny, nz, off
+        alive[f] = True
     used = 4
-    interior = points[[i0, i1, i2, i3]].mean(axis=0)
-    faces[:4] = [[i0, i1, i2], [i0, i1, i3], [i0, i2, i3], [i1, i2, i3]]
-    normals[:4], offsets[:4] = _plane_normals(points, faces[:4])
-    inward = normals[:4] @ interior - offsets[:4] > 0.0
-    faces[:4][inward] = faces[:4][inward][:, [0, 2, 1]]
-    normals[:4][inward] *= -1.0
-    offsets[:4][inward] *= -1.0
-    alive[:4] = True
-
-    coords = points.tolist()
-    for k in np.argsort(-spread, kind="stable").tolist():
+    seen = np.zeros(capacity, np.bool_)
+    edges = np.empty((3 * capacity, 2), np.intp)
+    horizon = np.empty((3 * capacity, 2), np.intp)
+    for k in np.argsort(-spread, kind="mergesort"):
         if k in (i0, i1, i2, i3):
             continue
-        height = normals[:used] @ points[k]
-        height -= offsets[:used]
-        seen = np.flatnonzero((height > tol) & alive[:used])
-        if seen.size == 0:
+        any_seen = False
+        for f in range(used):
+            height_k = (
+                normals[f, 0] * points[k, 0]
+                + normals[f, 1] * points[k, 1]
+                + normals[f, 2] * points[k, 2]
+                - offsets[f]
+            )
+            seen[f] = alive[f] and height_k > tol
+            any_seen = any_seen or seen[f]
+        if not any_seen:
             continue
         # A horizon edge borders one seen facet: inside the seen patch every directed
         # edge a→b meets its reverse b→a in the neighbouring facet.
-        edges: set[tuple[int, int]] = set()
-        for a, b, c in faces[seen].tolist():
-            edges.update(((a, b), (b, c), (c, a)))
-        horizon = [(a, b) for a, b in edges if (b, a) not in edges]
-        if used + len(horizon) > capacity:
-            keep = np.flatnonzero(alive[:used])
-            used = keep.size
-            faces[:used], normals[:used], offsets[:used] = faces[keep], normals[keep], offsets[keep]
+        n_edges = 0
+        for f in range(used):
+            if seen[f]:
+                for e in range(3):
+                    edges[n_edges, 0] = faces[f, e]
+                    edges[n_edges, 1] = faces[f, (e + 1) % 3]
+                    n_edges += 1
+        n_horizon = 0
+        for e in range(n_edges):
+            inner = False
+            for g in range(n_edges):
+                if edges[g, 0] == edges[e, 1] and edges[g, 1] == edges[e, 0]:
+                    inner = True
+                    break
+            if not inner:
+                horizon[n_horizon, 0] = edges[e, 0]
+                horizon[n_horizon, 1] = edges[e, 1]
+                n_horizon += 1
+        for f in range(used):
+            if seen[f]:
+                alive[f] = False
+        if used + n_horizon > capacity:  # compact the live facets first
+            kept = 0
+            for f in range(used):
+                if alive[f]:
+                    faces[kept] = faces[f]
+                    normals[kept] = normals[f]
+                    offsets[kept] = offsets[f]
+                    kept += 1
             alive[:] = False
-            alive[:used] = True
-            seen = np.flatnonzero(normals[:used] @ points[k] - offsets[:used] > tol)
-        alive[seen] = False
+            alive[:kept] = True
+            used = kept
         # Keeping each horizon edge's direction keeps every facet's winding outward.
-        # A fan has a handful of facets: plain floats beat numpy's per-call cost.
-        end = used + len(horizon)
-        faces[used:end] = [(a, b, k) for a, b in horizon]
-        planes = [_fan_plane(coords[a], coords[b], coords[k]) for a, b in horizon]
-        normals[used:end] = [plane[:3] for plane in planes]
-        offsets[used:end] = [plane[3] for plane in planes]
-        alive[used:end] = True
-        used = end
+        for e in range(n_horizon):
+            a, b = horizon[e, 0], horizon[e, 1]
+            faces[used, 0], faces[used, 1], faces[used, 2] = a, b, k
+            nx, ny, nz, off = _plane(points, a, b, k)
+            normals[used, 0], normals[used, 1], normals[used, 2] = nx, ny, nz
+            offsets[used] = off
+            alive[used] = True
+            used += 1
 
-    normals, offsets = normals[:used][alive[:used]], offsets[:used][alive[:used]]
+    result = normals[:used][alive[:used]]
+    result_offsets = offsets[:used][alive[:used]]
     # A valid hull has every point inside every facet and the interior point strictly
     # inside; floating point can in principle break an incremental hull.
-    valid = (
-        np.all(np.isfinite(normals))
-        and np.max(points @ normals.T - offsets) <= 100.0 * tol
-        and np.all(normals @ interior - offsets < 0.0)
-    )
-    return normals if valid else _facet_normals_by_enumeration(points, tol)
+    for f in range(len(result)):
+        if not np.all(np.isfinite(result[f])):
+            return none, _BROKEN
+        if np.dot(result[f], interior) - result_offsets[f] >= 0.0:
+            return none, _BROKEN
+        for i in range(count):
+            if np.dot(result[f], points[i]) - result_offsets[f] > 100.0 * tol:
+                return none, _BROKEN
+    return result, _HULL
 
 
 def _facet_normals_by_enumeration(

@@ -47,14 +47,19 @@ _register()
 
 
 def make_simulation(
-    config: str | Path | dict[str, Any] | SceneConfig | None = None, **overrides: Any
+    config: str | Path | dict[str, Any] | SceneConfig | None = None,
+    *,
+    fidelity: str = "default",
+    error_budget: float | None = None,
+    **overrides: Any,
 ) -> Simulation:
     """Build a :class:`~graspenv.simulation.Simulation` for users who bring their own
-    masks; see :func:`graspenv.simulation.make_simulation`."""
+    masks, at one of the environments' fidelity presets; see
+    :func:`graspenv.simulation.make_simulation`."""
     # Imported here so `import graspenv` stays light (no PyBullet until needed).
     from graspenv.simulation import make_simulation as make
 
-    return make(config, **overrides)
+    return make(config, fidelity=fidelity, error_budget=error_budget, **overrides)
 
 
 __all__ = [

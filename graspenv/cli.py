@@ -163,6 +163,14 @@ def _bench(args: argparse.Namespace) -> int:
         write_outputs,
     )
 
+    if args.speed:
+        from graspenv.bench.speed import run_speed
+
+        report = run_speed(_say, runs=args.runs, env_steps=args.env_steps)
+        print(report.markdown())
+        for path in report.write(Path(args.out)):
+            print(f"wrote {path}")
+        return 0
     if args.soak is not None:
         from graspenv.bench.soak import soak
 
@@ -218,6 +226,16 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
         default=None,
         metavar="FRAMES",
         help="instead: the grasp cycle for FRAMES frames, invariants and memory (soak.csv)",
+    )
+    p.add_argument(
+        "--speed",
+        action="store_true",
+        help="instead: whole-run speeds, environment steps/s beside panda-gym, resets, "
+        "frame cost against contacts and compile times (speed.md, speed.csv, scaling.png)",
+    )
+    p.add_argument("--runs", type=int, default=3, help="--speed: whole runs of each scene")
+    p.add_argument(
+        "--env-steps", type=int, default=600, help="--speed: steps per environment measurement"
     )
     p.set_defaults(run=_bench)
 

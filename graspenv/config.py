@@ -36,6 +36,7 @@ __all__ = [
     "choose_fidelity",
     "load_config",
     "read_config_file",
+    "resolve_fidelity",
     "scene_from",
 ]
 
@@ -378,6 +379,26 @@ def choose_fidelity(error_budget_mm: float) -> str:
         if PRESET_DRIFT_MM[name] <= error_budget_mm:
             return name
     return "reference"
+
+
+def resolve_fidelity(fidelity: str, error_budget: float | None = None) -> str:
+    """The preset a ``fidelity`` argument names: one of :data:`FIDELITY_PRESETS`, or
+    ``"auto"``, the cheapest whose measured drift is within ``error_budget`` mm
+    (:func:`choose_fidelity`).
+
+    Raises:
+        ValueError: an unknown name, ``"auto"`` without a budget, or a budget with
+            another name.
+    """
+    if fidelity == "auto":
+        if error_budget is None:
+            raise ValueError("fidelity='auto' needs error_budget (mm of drift)")
+        return choose_fidelity(error_budget)
+    if error_budget is not None:
+        raise ValueError("error_budget is only used with fidelity='auto'")
+    if fidelity not in FIDELITY_PRESETS:
+        raise ValueError(f"fidelity must be one of {[*FIDELITY_PRESETS, 'auto']}, got {fidelity!r}")
+    return fidelity
 
 
 def to_dict(config: Any) -> Any:

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from graspenv.config import SceneConfig, load_config
+from graspenv.config import FIDELITY_PRESETS, SceneConfig, load_config, resolve_fidelity
 from graspenv.contacts.extract import validate_mask
 from graspenv.contacts.tracking import ContactFrame, ContactTracker
 from graspenv.physics.world import ContactReport, PhysicsWorld
@@ -321,16 +321,30 @@ class Simulation:
 
 
 def make_simulation(
-    config: str | Path | dict[str, Any] | SceneConfig | None = None, **overrides: Any
+    config: str | Path | dict[str, Any] | SceneConfig | None = None,
+    *,
+    fidelity: str = "default",
+    error_budget: float | None = None,
+    **overrides: Any,
 ) -> Simulation:
     """Build a :class:`Simulation` for users who bring their own masks.
 
     Args:
         config: a scene file in ``envs_configs/`` (TOML or JSON), a dict with the same
             keys, a :class:`SceneConfig`, or ``None`` for the built-in default scene.
-        **overrides: sections merged over it, e.g. ``proxy={"method": "rigid"}``.
+        fidelity: the environments' presets (:data:`graspenv.config.FIDELITY_PRESETS`:
+            ``fast``, ``default``, ``reference``), merged over ``config``; or
+            ``"auto"``: the cheapest preset whose measured drift is within
+            ``error_budget`` millimetres.
+        error_budget: millimetres of drift against the reference, for ``"auto"``.
+        **overrides: sections merged over both, e.g. ``proxy={"method": "rigid"}``.
 
     Raises:
         ConfigError: unknown keys or bad values, naming the key and the file.
+        ValueError: an unknown fidelity, or ``"auto"`` without a budget.
     """
-    return Simulation(load_config(config, **overrides))
+    preset = FIDELITY_PRESETS[resolve_fidelity(fidelity, error_budget)]
+    scene = load_config(config)
+    if preset:
+        scene = scene.replace(**preset)
+    return Simulation(scene.replace(**overrides) if overrides else scene)

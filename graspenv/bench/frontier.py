@@ -233,17 +233,22 @@ def placement_offsets(count: int, scene: SceneConfig) -> list[Offset]:
     ]
 
 
+def turn_scene(base: SceneConfig, offset: Offset = (0.0, 0.0)) -> tuple[SceneConfig, Script]:
+    """The canonical scene: two fingertips squeeze the 6 cm box and turn it 90° in
+    place (90 frames), then hold (15 frames)."""
+    box = _shifted(BOX, offset)
+    script = pinch(box, DEPTH, turn=math.pi / 2, turn_frames=90, slide_frames=0, hold_frames=15)
+    return with_objects(base, box), script
+
+
 def turn(
     base: SceneConfig,
     offset: Offset = (0.0, 0.0),
     noise: SensorNoise | None = None,
     replays: int = 1,
 ) -> Played:
-    box = _shifted(BOX, offset)
-    script = pinch(box, DEPTH, turn=math.pi / 2, turn_frames=90, slide_frames=0, hold_frames=15)
-    played = play(
-        with_objects(base, box), script, ["box"], ("turn", "hold"), noise, replays=replays
-    )
+    scene, script = turn_scene(base, offset)
+    played = play(scene, script, ["box"], ("turn", "hold"), noise, replays=replays)
     x, y, _, yaw = played.final["box"]
     played.errors["yaw_error_deg"] = math.degrees(math.remainder(yaw - math.pi / 2, 2 * math.pi))
     played.errors["drift_mm"] = 1000 * math.hypot(x - offset[0], y - offset[1])
@@ -351,8 +356,12 @@ def _five_finger_hand(hand: Hand, prefix: str, centre: tuple[float, float], half
         hand.add(f"{prefix}{k}", tip, touching=False)
 
 
-def two_hands(base: SceneConfig, offset: Offset = (0.0, 0.0), replays: int = 1) -> Played:
-    """Ten fingertips: each hand squeezes its own box and carries it 8 cm."""
+def two_hands_scene(
+    base: SceneConfig, offset: Offset = (0.0, 0.0)
+) -> tuple[SceneConfig, Script, ObjectConfig, ObjectConfig]:
+    """Ten fingertips, five per hand: each hand squeezes its own box and carries it
+    8 cm, the hands in opposite directions. Returns the scene, the script and the
+    left and right boxes."""
     left, right = (
         _shifted(replace(BOX, name=name, position=(x, 0.0)), offset)
         for name, x in (("left", -0.1), ("right", 0.1))
@@ -384,13 +393,13 @@ def two_hands(base: SceneConfig, offset: Offset = (0.0, 0.0), replays: int = 1) 
             Phase(15, {n: FingerMotion(touching=True) for n in names}, name="hold"),
         ],
     )
-    played = play(
-        with_objects(base, left, right),
-        script,
-        ["left", "right"],
-        ("carry", "hold"),
-        replays=replays,
-    )
+    return with_objects(base, left, right), script, left, right
+
+
+def two_hands(base: SceneConfig, offset: Offset = (0.0, 0.0), replays: int = 1) -> Played:
+    """Ten fingertips: each hand squeezes its own box and carries it 8 cm."""
+    scene, script, left, right = two_hands_scene(base, offset)
+    played = play(scene, script, ["left", "right"], ("carry", "hold"), replays=replays)
     # The left box is carried 8 cm along +y, the right one along -y.
     errors = [
         math.hypot(*(played.final[box.name][:2] - (box.position[0], box.position[1] + carry_y)))

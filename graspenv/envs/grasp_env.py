@@ -26,8 +26,8 @@ from graspenv.config import (
     ConfigError,
     SceneConfig,
     build_section,
-    choose_fidelity,
     read_config_file,
+    resolve_fidelity,
     scene_from,
 )
 from graspenv.demo import footprint
@@ -182,16 +182,7 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
                 f"render_mode must be one of {self.metadata['render_modes']} or None, "
                 f"got {render_mode!r}"
             )
-        if fidelity == "auto":
-            if error_budget is None:
-                raise ValueError("fidelity='auto' needs error_budget (mm of drift)")
-            fidelity = choose_fidelity(error_budget)
-        elif error_budget is not None:
-            raise ValueError("error_budget is only used with fidelity='auto'")
-        if fidelity not in FIDELITY_PRESETS:
-            raise ValueError(
-                f"fidelity must be one of {[*FIDELITY_PRESETS, 'auto']}, got {fidelity!r}"
-            )
+        fidelity = resolve_fidelity(fidelity, error_budget)
         self.fidelity = fidelity
         scene, task_config, controller_config, reward_config = load_env_config(task_cls, config)
         sections: dict[str, Any] = dict(FIDELITY_PRESETS[fidelity])

@@ -255,20 +255,53 @@ def _primitive_wrenches(
         raise ValueError(f"cone_edges must be >= 2, got {cone_edges}")
     if p.shape[0] < 2:
         return None
-    length = np.linalg.norm(n, axis=1)
+    length = np.hypot(n[:, 0], n[:, 1])
     if not np.all(length > 0.0):
         raise ValueError(f"every normal must be non-zero; rows {np.flatnonzero(length == 0)}")
-    n = n / length[:, None]
-    t = np.column_stack([-n[:, 1], n[:, 0]])
-    r = p - c
-    rho = float(np.max(np.linalg.norm(r, axis=1))) if torque_scale is None else torque_scale
+    return _wrenches(
+        np.ascontiguousarray(p),
+        np.ascontiguousarray(n),
+        float(mu),
+        c,
+        -1.0 if torque_scale is None else float(torque_scale),
+        int(cone_edges),
+    )
+
+
+@njit
+def _wrenches(
+    p: NDArray[np.float64],
+    n: NDArray[np.float64],
+    mu: float,
+    c: NDArray[np.float64],
+    torque_scale: float,
+    cone_edges: int,
+) -> NDArray[np.float64]:
+    """:func:`_primitive_wrenches` once checked; ``torque_scale`` < 0 for None."""
+    k = len(p)
+    rho = torque_scale
+    if rho < 0.0:
+        rho = 0.0
+        for i in range(k):
+            rho = max(rho, np.sqrt((p[i, 0] - c[0]) ** 2 + (p[i, 1] - c[1]) ** 2))
     if rho == 0.0:  # every contact at the centre: no torques at all (a flat wrench set)
         rho = 1.0
     # Without friction the samples coincide; one per contact keeps the hull small.
     s = np.linspace(-1.0, 1.0, cone_edges) if mu > 0.0 else np.zeros(1)
-    force = n[:, None, :] + (mu * s)[None, :, None] * t[:, None, :]  # (K, E, 2)
-    torque = r[:, None, 0] * force[..., 1] - r[:, None, 1] * force[..., 0]  # (K, E)
-    return np.concatenate([force, (torque / rho)[..., None]], axis=2).reshape(-1, 3)
+    edges = len(s)
+    out = np.empty((k * edges, 3))
+    for i in range(k):
+        length = np.sqrt(n[i, 0] ** 2 + n[i, 1] ** 2)
+        nx, ny = n[i, 0] / length, n[i, 1] / length
+        tx, ty = -ny, nx
+        rx, ry = p[i, 0] - c[0], p[i, 1] - c[1]
+        for e in range(edges):
+            fx = nx + (mu * s[e]) * tx
+            fy = ny + (mu * s[e]) * ty
+            row = i * edges + e
+            out[row, 0], out[row, 1] = fx, fy
+            out[row, 2] = (rx * fy - ry * fx) / rho
+    return out
 
 
 def _epsilon_of_wrenches(wrenches: NDArray[np.float64]) -> float:
@@ -724,9 +757,7 @@ def grasp_metrics(
     tilt = tilt_angle(np.asarray(object_quaternion, dtype=float))
 
     touching = is_particle & ((distance <= 0.0) | (normal_force > 0.0))
-    ids, row_of = np.unique(particle[touching], return_inverse=True)
-    row_of = row_of.reshape(-1)
-    if ids.size == 0:
+    if not touching.any():
         return GraspMetrics(
             grip_force=grip_force,
             n_contacts=0,
@@ -737,26 +768,14 @@ def grasp_metrics(
             penetration=penetration,
         )
 
-    # Weights fall back to 1 for a particle touching without force, so that it still
-    # has a point and a normal.
-    force = normal_force[touching]
-    total = np.zeros(ids.size)
-    np.add.at(total, row_of, force)
-    weight = np.where(total[row_of] > 0.0, force, 1.0)
-    weight_sum = np.zeros(ids.size)
-    np.add.at(weight_sum, row_of, weight)
-
-    def merged(values: NDArray[np.float64]) -> NDArray[np.float64]:
-        out = np.zeros((ids.size, values.shape[1]))
-        np.add.at(out, row_of, weight[:, None] * values)
-        return out
-
-    points = merged(position[touching]) / weight_sum[:, None]
-    fingers = merged(velocity_rows[touching]) / weight_sum[:, None]
-    normals = merged(normal[touching])
-    horizontal = np.linalg.norm(normals[:, :2], axis=1)
-    side = horizontal >= np.maximum(min_horizontal_normal * np.linalg.norm(normals, axis=1), 1e-300)
-
+    points, fingers, normals, side = _merge_contacts(
+        particle[touching],
+        np.ascontiguousarray(position[touching]),
+        np.ascontiguousarray(normal[touching]),
+        normal_force[touching],
+        np.ascontiguousarray(velocity_rows[touching]),
+        float(min_horizontal_normal),
+    )
     slip = planar_slip(centre, planar_velocity, points[:, :2], fingers)
     epsilon = ferrari_canny(
         points[side, :2],
@@ -768,13 +787,59 @@ def grasp_metrics(
     )
     return GraspMetrics(
         grip_force=grip_force,
-        n_contacts=int(ids.size),
+        n_contacts=len(points),
         force_closure=epsilon > closure_tolerance,
         epsilon=epsilon,
         slip=slip,
         tilt=tilt,
         penetration=penetration,
     )
+
+
+@njit
+def _merge_contacts(
+    particle: NDArray[np.int64],
+    position: NDArray[np.float64],
+    normal: NDArray[np.float64],
+    normal_force: NDArray[np.float64],
+    velocity: NDArray[np.float64],
+    min_horizontal_normal: float,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+    """One contact per touching particle (:func:`grasp_metrics`), in increasing id.
+
+    Returns:
+        (points, velocities, normals, side): the force-weighted mean point (K, 3),
+        particle velocity (K, 2) and normal (K, 3, not normalised) of each particle's
+        rows, and whether it is a side contact (K,).
+    """
+    ids = np.unique(particle)
+    row_of = np.searchsorted(ids, particle)
+    # Weights fall back to 1 for a particle touching without force, so that it still
+    # has a point and a normal.
+    total = np.zeros(len(ids))
+    for r in range(len(particle)):
+        total[row_of[r]] += normal_force[r]
+    points = np.zeros((len(ids), 3))
+    velocities = np.zeros((len(ids), 2))
+    normals = np.zeros((len(ids), 3))
+    weight_sum = np.zeros(len(ids))
+    for r in range(len(particle)):
+        i = row_of[r]
+        weight = normal_force[r] if total[i] > 0.0 else 1.0
+        weight_sum[i] += weight
+        for d in range(3):
+            points[i, d] += weight * position[r, d]
+            normals[i, d] += weight * normal[r, d]
+        for d in range(2):
+            velocities[i, d] += weight * velocity[r, d]
+    side = np.empty(len(ids), np.bool_)
+    for i in range(len(ids)):
+        points[i] /= weight_sum[i]
+        velocities[i] /= weight_sum[i]
+        horizontal = np.sqrt(normals[i, 0] ** 2 + normals[i, 1] ** 2)
+        length = np.sqrt(normals[i, 0] ** 2 + normals[i, 1] ** 2 + normals[i, 2] ** 2)
+        side[i] = horizontal >= max(min_horizontal_normal * length, 1e-300)
+    return points, velocities, normals, side
 
 
 def _velocity_rows(

@@ -195,6 +195,8 @@ class ParticlePool:
             ids: particle ids, shape (n,); releasing a parked particle is an error.
         """
         ids = self._check(ids)
+        if ids.size == 0:
+            return
         self._active[ids] = False
         self._park(ids)
 

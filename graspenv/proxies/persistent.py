@@ -148,6 +148,8 @@ class PersistentProxies:
         """Bookkeeping for one frame; ``mask`` is not needed by this method."""
         del mask
         proxy, layers, before = self._proxy, self._layers, self._tracks
+        if len(before.ids) == 0 and len(frame) == 0:  # nothing on the table
+            return ProxyCommand(np.zeros((0, layers), np.int64), np.zeros((0, 2)), np.zeros(0))
         plan = _Plan(
             *_plan_follow(
                 before.ids, before.bounds, before.points, before.centroids,

@@ -108,7 +108,14 @@ class FingerController:
         self.hand = Hand()
         for name in self.names:
             self.hand.add(name, Fingertip((0.0, 0.0), radii=(r, r)), touching=False)
-        self.grip = GripState(np.zeros(2), 0.0, config.max_opening, False)
+        self._grip = GripState(np.zeros(2), 0.0, config.max_opening, False)
+        self._offsets = np.zeros((config.n_fingers, 2))  # of the grip, set with it
+        self._finger_angles = 2.0 * math.pi * np.arange(config.n_fingers) / config.n_fingers
+
+    @property
+    def grip(self) -> GripState:
+        """The grip the fingers sit on (move it with :meth:`place_grip` or actions)."""
+        return self._grip
 
     @property
     def action_size(self) -> int:
@@ -119,34 +126,34 @@ class FingerController:
     def place_grip(self, grip: GripState) -> None:
         """Put the fingers around a grip (any action mode)."""
         cfg = self.config
-        self.grip = GripState(
+        self._grip = GripState(
             np.asarray(grip.centre, dtype=float).copy(),
             float(grip.angle),
             float(np.clip(grip.opening, cfg.min_opening, cfg.max_opening)),
             bool(grip.touching),
         )
+        self._offsets = self._grip_offsets(self._grip)
         self._pose_from_grip()
 
     def place_fingers(self, centres: ArrayLike, touching: ArrayLike) -> None:
         """Put each finger at a position (metres, world frame, (n, 2)), up or down."""
         xy = np.asarray(centres, dtype=float).reshape(self.config.n_fingers, 2)
+        if not np.all(np.isfinite(xy)):
+            raise ValueError(f"finger centres must be finite, got {xy.tolist()}")
         down = np.broadcast_to(np.asarray(touching, dtype=bool), (self.config.n_fingers,))
-        for name, position, flag in zip(self.names, xy, down, strict=True):
-            tip = self.hand[name]
-            tip.set_twist((0.0, 0.0), 0.0)
-            tip.set_pose(centre=np.clip(position, -self._limit, self._limit), angle=0.0)
-            self.hand.set_touching(name, bool(flag))
+        xy = np.clip(xy, -self._limit, self._limit)
+        for name, position, flag in zip(self.names, xy, down.tolist(), strict=True):
+            self.hand[name].set_translation(position, 0.0, np.zeros(2))
+            self.hand.set_touching(name, flag)
 
     def _grip_offsets(self, grip: GripState) -> NDArray[np.float64]:
-        n = self.config.n_fingers
         reach = 0.5 * grip.opening + self.config.finger_radius
-        angles = grip.angle + 2.0 * math.pi * np.arange(n) / n
+        angles = grip.angle + self._finger_angles
         return reach * np.column_stack([np.cos(angles), np.sin(angles)])
 
     def _pose_from_grip(self) -> None:
-        grip = self.grip
-        centres = grip.centre + self._grip_offsets(grip)
-        self.place_fingers(centres, grip.touching)
+        """The fingers where the grip puts them (its offsets already computed)."""
+        self.place_fingers(self._grip.centre + self._offsets, self._grip.touching)
 
     # -- stepping ------------------------------------------------------------------------
 
@@ -188,7 +195,7 @@ class FingerController:
             self.hand.set_touching(name, bool(touch > 0.0))
 
     def _apply_grip(self, a: NDArray[np.float64]) -> None:
-        cfg, dt, grip = self.config, self.surface.dt, self.grip
+        cfg, dt, grip = self.config, self.surface.dt, self._grip
         velocity = cfg.max_speed * a[:2]
         goal_centre = np.clip(grip.centre + velocity * dt, -self._limit, self._limit)
         turn = cfg.max_turn_rate * a[2] * dt
@@ -197,22 +204,26 @@ class FingerController:
         )
         touching = bool(a[4] > 0.0)
         goal = GripState(goal_centre, grip.angle + turn, opening, touching)
-        now = grip.centre + self._grip_offsets(grip)
-        then = goal_centre + self._grip_offsets(goal)
-        for name, start, end in zip(self.names, now, then, strict=True):
+        offsets = self._grip_offsets(goal)
+        now = grip.centre + self._offsets
+        then = goal_centre + offsets
+        velocities = (then - now) / dt
+        for name, velocity in zip(self.names, velocities, strict=True):
             tip = self.hand[name]
             # Each fingertip moves straight to its place in the next frame; a round
             # tip's own rotation is invisible, so only its centre's path matters.
-            tip.set_twist((end - start) / dt, 0.0)
+            tip.set_translation(tip.centre, tip.angle, velocity)
             self.hand.set_touching(name, touching)
-        self.grip = goal
+        self._grip, self._offsets = goal, offsets
 
     def advance(self) -> None:
         """Move the hand by one camera frame (after rendering this frame's mask)."""
-        self.hand.advance(self.surface.dt)
         if self.mode == "grip":
-            # Re-anchor the fingers exactly on the grip, so rounding never drifts.
+            # The fingers go exactly where the grip puts them, so rounding never
+            # drifts (moving them by their twist first would change nothing).
             self._pose_from_grip()
+        else:
+            self.hand.advance(self.surface.dt)
 
     # -- reading -------------------------------------------------------------------------
 

@@ -159,6 +159,21 @@ class ContactShape(ABC):
         self._pivot = self._centre.copy()
         self._pivot_velocity = velocity
 
+    def set_translation(self, centre: FloatArray, angle: float, velocity: FloatArray) -> None:
+        """Place the shape at ``centre`` and ``angle``, moving at ``velocity`` without
+        spin (the pivot at the centre).
+
+        The same state as ``set_pose(centre, angle)`` then ``set_twist(velocity, 0.0)``,
+        for callers that computed the values themselves (the finger controller, every
+        frame): metres, radians and m/s, world frame, finite float arrays of shape
+        (2,), taken as they are.
+        """
+        self._centre = centre
+        self._angle = angle
+        self._pivot = centre.copy()
+        self._pivot_velocity = velocity
+        self._angular_velocity = 0.0
+
     def set_twist(
         self,
         linear: ArrayLike,

@@ -35,7 +35,7 @@ import contextlib
 import itertools
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from types import TracebackType
 
@@ -55,7 +55,7 @@ from graspenv.physics.pool import (
 from graspenv.physics.rigid import RigidBodies
 from graspenv.physics.view import FLOOR_RGBA, TABLE_RGBA, object_rgba, render_rgb
 
-__all__ = ["ContactReport", "FootprintHits", "PhysicsWorld", "RayHits"]
+__all__ = ["ContactReport", "FootprintHits", "ObjectStates", "PhysicsWorld", "RayHits"]
 
 #: Thickness of the table slab under z = 0, metres.
 TABLE_THICKNESS = 0.05
@@ -152,6 +152,40 @@ class ContactReport:
         return ids.astype(np.int64), force
 
 
+@dataclass(frozen=True)
+class ObjectStates:
+    """Every object's state at one moment, rows in ``PhysicsWorld.object_names`` order.
+
+    Attributes:
+        position: centres of mass, metres, world frame, (O, 3).
+        quaternion: orientations (x, y, z, w), (O, 4).
+        rotation: the same as row-major 3 × 3 matrices (Bullet's), (O, 9).
+        linear: velocities, m/s, world frame, (O, 3).
+        angular: angular velocities, rad/s, world frame, (O, 3).
+    """
+
+    position: NDArray[np.float64]
+    quaternion: NDArray[np.float64]
+    rotation: NDArray[np.float64]
+    linear: NDArray[np.float64]
+    angular: NDArray[np.float64]
+
+    @classmethod
+    def read(cls, client: int, bodies: Sequence[int]) -> ObjectStates:
+        """Two Bullet calls per body, and its rotation matrix."""
+        count = len(bodies)
+        position, quaternion = np.empty((count, 3)), np.empty((count, 4))
+        rotation = np.empty((count, 9))
+        linear, angular = np.empty((count, 3)), np.empty((count, 3))
+        for i, body in enumerate(bodies):
+            position[i], quaternion[i] = pb.getBasePositionAndOrientation(body, client)
+            rotation[i] = pb.getMatrixFromQuaternion(quaternion[i].tolist())
+            linear[i], angular[i] = pb.getBaseVelocity(body, client)
+        for array in (position, quaternion, rotation, linear, angular):
+            array.setflags(write=False)
+        return cls(position, quaternion, rotation, linear, angular)
+
+
 class PhysicsWorld:
     """A table, its objects and a pool of particle proxies in a PyBullet DIRECT client.
 
@@ -211,6 +245,8 @@ class PhysicsWorld:
         self.rigid_proxies = RigidBodies(self.client, scene.proxy, scene.physics)
         # Force on each object (by index) for every sub-step of the next frame, N.
         self._pending_force: dict[int, NDArray[np.float64]] = {}
+        self._states: ObjectStates | None = None
+        self._states_step = -1
         self._place_objects()
         self.bullet_seconds = 0.0
         """Wall seconds spent inside Bullet's ``stepSimulation`` by the last frame."""
@@ -296,6 +332,7 @@ class PhysicsWorld:
             position, orientation = _initial_pose(config)
             pb.resetBasePositionAndOrientation(body, position, orientation, client)
             pb.resetBaseVelocity(body, _ZERO, _ZERO, client)
+        self._states = None
 
     def rebuild(self, scene: SceneConfig) -> None:
         """Replace the whole scene by another one, as if this world were new.
@@ -357,9 +394,9 @@ class PhysicsWorld:
             (position, quaternion): centre of mass, metres, world frame, shape (3,);
             orientation as (x, y, z, w), shape (4,).
         """
-        body = self._object_bodies[self.object_index(name)]
-        position, orientation = pb.getBasePositionAndOrientation(body, physicsClientId=self.client)
-        return np.array(position), np.array(orientation)
+        states = self.object_states()
+        index = self.object_index(name)
+        return states.position[index].copy(), states.quaternion[index].copy()
 
     def object_velocity(self, name: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Velocity of an object.
@@ -367,9 +404,19 @@ class PhysicsWorld:
         Returns:
             (linear, angular): m/s and rad/s, world frame, shapes (3,) and (3,).
         """
-        body = self._object_bodies[self.object_index(name)]
-        linear, angular = pb.getBaseVelocity(body, physicsClientId=self.client)
-        return np.array(linear), np.array(angular)
+        states = self.object_states()
+        index = self.object_index(name)
+        return states.linear[index].copy(), states.angular[index].copy()
+
+    def object_states(self) -> ObjectStates:
+        """Every object's pose and velocity now, read from Bullet once per physics step
+        (and after :meth:`set_object_state`), so that the stages of a frame share one
+        read. Read-only arrays, rows in :attr:`object_names` order."""
+        step = self.pool.physics_steps
+        if self._states is None or self._states_step != step:
+            self._states = ObjectStates.read(self.client, self._object_bodies)
+            self._states_step = step
+        return self._states
 
     def apply_force(self, name: str, force: ArrayLike) -> None:
         """Push an object at its centre of mass throughout the next camera frame.
@@ -406,6 +453,7 @@ class PhysicsWorld:
         angular_velocity: ArrayLike | None = None,
         *,
         rolling: bool = False,
+        orientation: ArrayLike | None = None,
     ) -> None:
         """Move an object and/or set its velocity now (e.g. at the start of an episode).
 
@@ -419,6 +467,8 @@ class PhysicsWorld:
                 shape (2,), to rest it on the table (z = half its height).
             yaw: rotation about +z, radians; the object is stood upright with this
                 yaw (any tilt is dropped).
+            orientation: instead of ``yaw``, any orientation as a quaternion
+                (x, y, z, w), normalised here, shape (4,) (a tipped object).
             linear_velocity: m/s, world frame, shape (3,).
             angular_velocity: rad/s, world frame, shape (3,).
             rolling: for a sphere on the table: set the angular velocity so that it
@@ -443,6 +493,16 @@ class PhysicsWorld:
         )
         if yaw is not None and not math.isfinite(yaw):
             raise ValueError(f"yaw for {name!r} must be finite (radians), got {yaw!r}")
+        given_orientation = (
+            None if orientation is None else _finite(name, "orientation", orientation, ((4,),))
+        )
+        if given_orientation is not None:
+            if yaw is not None:
+                raise ValueError("pass either yaw or orientation, not both")
+            length = float(np.linalg.norm(given_orientation))
+            if length == 0.0:
+                raise ValueError(f"orientation for {name!r} must be a non-zero quaternion")
+            given_orientation /= length
         given_linear = (
             None
             if linear_velocity is None
@@ -458,7 +518,7 @@ class PhysicsWorld:
                 raise ValueError(f"rolling needs a sphere; {name!r} is a {config.shape}")
             if angular_velocity is not None:
                 raise ValueError("pass either rolling=True or angular_velocity, not both")
-        moves = position is not None or yaw is not None
+        moves = position is not None or yaw is not None or given_orientation is not None
         if not moves and given_linear is None and given_angular is None and not rolling:
             return
         now_linear, now_angular = pb.getBaseVelocity(body, physicsClientId=client)
@@ -469,7 +529,7 @@ class PhysicsWorld:
             # No slip where the sphere touches the table: v + ω × (−r ẑ) = 0.
             angular = np.array([-linear[1] / radius, linear[0] / radius, 0.0])
         if moves:
-            now_position, orientation = pb.getBasePositionAndOrientation(
+            now_position, quaternion = pb.getBasePositionAndOrientation(
                 body, physicsClientId=client
             )
             xyz = np.array(now_position)
@@ -478,12 +538,15 @@ class PhysicsWorld:
                 if xyz.shape == (2,):
                     xyz = np.append(xyz, config.height / 2)
             if yaw is not None:
-                orientation = pb.getQuaternionFromEuler((0.0, 0.0, float(yaw)))
+                quaternion = pb.getQuaternionFromEuler((0.0, 0.0, float(yaw)))
+            elif given_orientation is not None:
+                quaternion = tuple(given_orientation.tolist())
             # This also zeroes the body's velocity, which is set again below.
             pb.resetBasePositionAndOrientation(
-                body, xyz.tolist(), orientation, physicsClientId=client
+                body, xyz.tolist(), quaternion, physicsClientId=client
             )
         pb.resetBaseVelocity(body, linear.tolist(), angular.tolist(), physicsClientId=client)
+        self._states = None
 
     # -- pictures --------------------------------------------------------------------
 
@@ -602,14 +665,10 @@ class PhysicsWorld:
             culling needs to be safe). Shapes (N,).
         """
         points = np.ascontiguousarray(xy, dtype=float).reshape(-1, 2)
-        client = self.client
-        positions = np.empty((len(self._object_bodies), 3))
-        rotations = np.empty((len(self._object_bodies), 9))
-        for i, body in enumerate(self._object_bodies):
-            position, orientation = pb.getBasePositionAndOrientation(body, physicsClientId=client)
-            positions[i] = position
-            rotations[i] = pb.getMatrixFromQuaternion(orientation)  # row-major 3 × 3
-        return footprint_depths(points, self._shape_codes, self._sizes, positions, rotations)
+        states = self.object_states()
+        return footprint_depths(
+            points, self._shape_codes, self._sizes, states.position, states.rotation
+        )
 
     def contact_report(self, name: str) -> ContactReport:
         """Contacts on an object from the last physics sub-step.

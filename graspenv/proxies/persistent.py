@@ -300,8 +300,9 @@ class PersistentProxies:
             born: which points got their particle this frame, (K,); updated.
         """
         world, margin = self._world, self._proxy.cull_margin
-        speeds = [np.hypot(*world.object_velocity(name)[0][:2]) for name in world.object_names]
-        object_step = float(max(speeds, default=0.0)) * self._dt
+        linear = world.object_states().linear
+        speeds = np.hypot(linear[:, 0], linear[:, 1])
+        object_step = float(speeds.max(initial=0.0)) * self._dt
         reach = world.pool.radius + margin + 2.0 * travel + object_step
         bodiless = particles[:, 0] < 0
         near = np.flatnonzero(bodiless & (depth > -reach))

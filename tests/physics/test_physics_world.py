@@ -6,7 +6,6 @@ import math
 from collections.abc import Callable
 
 import numpy as np
-import pybullet as pb
 import pytest
 
 from graspenv.physics import PhysicsWorld
@@ -82,9 +81,7 @@ def test_footprint_of_a_tilted_box_is_the_shadow_of_its_corners(world: PhysicsWo
         yaw = rng.uniform(-math.pi, math.pi)
         centre = (0.01, -0.02, 0.02)
         body_q = _quaternion(roll, pitch, yaw)
-        # set_object_state stands objects upright; tilt the box directly.
-        body = world._object_bodies[world.object_index("box")]
-        pb.resetBasePositionAndOrientation(body, centre, body_q, physicsClientId=world.client)
+        world.set_object_state("box", centre, orientation=body_q)
         corners = (signs * size / 2) @ _rotation(body_q).T + centre
         shadow = np.unique(corners[:, :2].round(15), axis=0)  # upright: corners coincide
         hull = shadow[_hull_order(shadow)]

@@ -103,7 +103,14 @@ class ParticleDrive:
         mass = proxy.particle_mass
         step = goal - start
         k = len(goal) // layers
-        is_upper = np.tile(np.arange(layers) > 0, k)
+        if layers == 1:  # single particles, the common case: no stacks to hold
+            is_bottom = np.ones(k, bool)
+            bottom_of, rise = np.zeros(0, np.intp), np.zeros(0)
+        else:
+            is_upper = np.tile(np.arange(layers) > 0, k)
+            is_bottom = ~is_upper
+            bottom_of = np.repeat(np.arange(k) * layers, layers)[is_upper]
+            rise = np.tile(np.arange(layers) * proxy.stack_spacing, k)[is_upper]
         return cls(
             start=start,
             step=step,
@@ -111,9 +118,9 @@ class ParticleDrive:
             # moving target (the paper's law); with a longer Δt it would lag by u·Δt,
             # so the target's velocity is fed forward by the share it misses.
             feed_forward=(1.0 - h / tau) * step / frame_dt,
-            is_bottom=~is_upper,
-            bottom_of=np.repeat(np.arange(k) * layers, layers)[is_upper],
-            rise=np.tile(np.arange(layers) * proxy.stack_spacing, k)[is_upper],
+            is_bottom=is_bottom,
+            bottom_of=bottom_of,
+            rise=rise,
             substeps=substeps,
             tau=tau,
             gain=h / tau,

@@ -107,10 +107,12 @@ class ParticlePool:
         # smoothly through the frame rather than jumping in its first sub-step.
         self._last_target = np.zeros((0, 2))
         self._particle_of_body: dict[int, int] = {}
-        # Velocity of each particle at the end of the frame it was last stepped in,
-        # m/s, and the world's physics step count then (-1: unknown). The control
-        # step uses it instead of asking Bullet, one call per particle fewer.
+        # Position and velocity of each particle at the end of the frame it was last
+        # stepped in (or where it was placed), metres and m/s, and the world's
+        # physics step count then (-1: unknown). The control step uses them instead
+        # of asking Bullet, two calls per particle fewer.
         self._velocity = np.zeros((0, 3))
+        self._position = np.zeros((0, 3))
         self._velocity_step = np.zeros(0, dtype=np.int64)
         #: Physics steps taken by the world so far (kept by PhysicsWorld).
         self.physics_steps = 0
@@ -229,6 +231,7 @@ class ParticlePool:
                 physicsClientId=c,
             )
         self._last_target[ids] = xyz[:, :2]
+        self._position[ids] = xyz
         self._velocity[ids] = 0.0
         self._velocity_step[ids] = self.physics_steps
 
@@ -243,10 +246,13 @@ class ParticlePool:
         Returns:
             Positions, metres, world frame, shape (n, 3).
         """
+        position, known = self.cached_states(ids)[::2]
         c = self._client
         get = pb.getBasePositionAndOrientation
-        bodies = self._bodies[np.asarray(ids, dtype=np.int64).reshape(-1)].tolist()
-        return np.array([get(b, physicsClientId=c)[0] for b in bodies], dtype=float).reshape(-1, 3)
+        bodies = self._bodies[np.asarray(ids, dtype=np.int64).reshape(-1)]
+        for i in np.flatnonzero(~known).tolist():
+            position[i] = get(int(bodies[i]), physicsClientId=c)[0]
+        return position
 
     def velocities(self, ids: ArrayLike) -> NDArray[np.float64]:
         """Linear velocities of particles (their spin is what the control step set).
@@ -283,27 +289,34 @@ class ParticlePool:
         ids = np.asarray(ids, dtype=np.int64).reshape(-1)
         self._last_target[ids] = np.asarray(xy, dtype=float).reshape(ids.size, 2)
 
-    def cached_velocities(self, ids: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-        """Velocities recorded at the end of the last frame, if nothing stepped since.
+    def cached_states(
+        self, ids: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+        """Positions and velocities recorded at the end of the last frame (or at
+        :meth:`place`), if nothing stepped since: Bullet's own values, exactly, without
+        asking it.
 
         Args:
             ids: particle ids, shape (n,).
 
         Returns:
-            (velocity, known): m/s, world frame, shape (n, 3), and whether each is
-            still current, shape (n,).
+            (position, velocity, known): metres and m/s, world frame, shapes (n, 3),
+            and whether each row is still current, shape (n,).
         """
         ids = np.asarray(ids, dtype=np.int64).reshape(-1)
-        return self._velocity[ids].copy(), self._velocity_step[ids] == self.physics_steps
+        known = self._velocity_step[ids] == self.physics_steps
+        return self._position[ids], self._velocity[ids], known
 
-    def record_velocities(self, ids: ArrayLike, velocity: ArrayLike) -> None:
-        """Record particle velocities as current at ``physics_steps``.
+    def record_states(self, ids: ArrayLike, position: ArrayLike, velocity: ArrayLike) -> None:
+        """Record particle positions and velocities as current at ``physics_steps``.
 
         Args:
             ids: particle ids, shape (n,).
+            position: metres, world frame, shape (n, 3).
             velocity: m/s, world frame, shape (n, 3).
         """
         ids = np.asarray(ids, dtype=np.int64).reshape(-1)
+        self._position[ids] = np.asarray(position, dtype=float).reshape(ids.size, 3)
         self._velocity[ids] = np.asarray(velocity, dtype=float).reshape(ids.size, 3)
         self._velocity_step[ids] = self.physics_steps
 
@@ -373,6 +386,7 @@ class ParticlePool:
             self._active = np.concatenate([self._active, np.zeros(bodies.size, dtype=bool)])
             self._planar = np.concatenate([self._planar, np.ones(bodies.size, dtype=bool)])
             self._velocity = np.concatenate([self._velocity, np.zeros((bodies.size, 3))])
+            self._position = np.concatenate([self._position, park])
             self._velocity_step = np.concatenate(
                 [self._velocity_step, np.full(bodies.size, -1, dtype=np.int64)]
             )

@@ -790,12 +790,12 @@ class PhysicsWorld:
         # Velocities: Bullet moves a body by h·v after its solve (pybullet splits
         # impulses only past 4 cm of penetration), so a particle's velocity is its
         # last displacement over h, exact to rounding; only the first sub-step
-        # needs last frame's, which the pool keeps. One Bullet call per particle
-        # fewer, a quarter of the loop.
-        v, known = self.pool.cached_velocities(flat)
+        # needs last frame's, which the pool keeps with the position it read then
+        # (or placed the particle at). Two Bullet calls per particle fewer a frame.
+        x, v, known = self.pool.cached_states(flat)
         for i in np.flatnonzero(~known).tolist():
+            x[i] = get_position(bodies[i], client)[0]
             v[i] = pb.getBaseVelocity(bodies[i], client)[0]
-        x = read_positions()
         # Where each bottom particle should rest: on the surface under it (rays from
         # the particle down ignore whatever is above it). One at table level cannot
         # be above its support and needs no ray.
@@ -817,7 +817,7 @@ class PhysicsWorld:
             state[0] = moved
 
         self._substeps(h, drive_particles, observe)
-        self.pool.record_velocities(flat, state[1])
+        self.pool.record_states(flat, state[0], state[1])
         self.pool.set_last_targets(flat, goal)
         return state[0].reshape(*np.shape(particles), 3)
 

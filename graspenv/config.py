@@ -88,13 +88,20 @@ class ContactConfig:
             (:class:`SceneConfig`); a tracker on its own, from the default radius.
         match_radius: largest centroid travel, metres per frame, for a contact to keep
             its id from one frame to the next.
-        min_area: components smaller than this many pixels are dropped as noise
-            (0 keeps single pixels).
+        min_area: components with fewer pixels than this are dropped as sensor
+            noise, as table software drops specks below a minimum blob size (0 keeps
+            single pixels). The default, 4 pixels (3.6 mm² on the default table),
+            removes isolated flipped pixels and most pairs, while the smallest real
+            contact, a light 5 mm fingertip, covers about 85; measured on the
+            canonical turn with 0.05 % of pixels flipped, the filter takes the
+            specks from 153 to 0 contacts a frame and the turn's error from 30° to
+            0.3° (README, "Frame cost against contacts"). It is in pixels: scale it
+            with the resolution.
     """
 
     spacing: float | Literal["auto"] = "auto"
     match_radius: float = 0.03
-    min_area: float = 0.0
+    min_area: float = 4.0
 
     def __post_init__(self) -> None:
         if self.spacing != "auto":

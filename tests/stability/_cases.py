@@ -334,8 +334,9 @@ def off_the_edge() -> Case:
 def single_pixels() -> Case:
     """Single-pixel contacts: still ones on the box's top, on its edges and beside
     its sides; one that presses into its side a pixel a frame; others that flicker
-    on and off at random around it."""
-    config = scene(box())
+    on and off at random around it. The table's smallest-contact filter is off:
+    single pixels are what this case is about."""
+    config = scene(box(), contacts={"min_area": 0.0})
     surface = Surface.from_config(config.surface)
     still = surface.world_to_pixel(
         np.array([[0.0, 0.0], [0.02, 0.01], [-0.031, 0.0], [0.0, 0.0305], [0.031, -0.02]])
@@ -365,9 +366,10 @@ def single_pixels() -> Case:
 def border() -> Case:
     """Contacts on the image border: single pixels in the corners and mid-edge that
     blink, a fingertip half off the table sliding along its left edge into a box
-    lying there, and one in the corner; both then leave the image."""
+    lying there, and one in the corner; both then leave the image. Single pixels
+    need the smallest-contact filter off."""
     half_w, half_h = TABLE_SIZE[0] / 2, TABLE_SIZE[1] / 2
-    config = scene(box(position=(-half_w + 0.035, 0.0)))
+    config = scene(box(position=(-half_w + 0.035, 0.0)), contacts={"min_area": 0.0})
     surface = Surface.from_config(config.surface)
     width, height = surface.resolution
     corners = np.array([[0, 0], [width - 1, 0], [0, height - 1], [width - 1, height - 1]])
@@ -407,10 +409,12 @@ def border() -> Case:
 NOISE = SensorNoise(blur_sigma=0.7, salt_pepper=2e-5, holes=3, hole_radius=2.5, jitter=1.0)
 
 
-def noisy() -> Case:
-    """The pinch of the box seen through :data:`NOISE`."""
+def noisy(min_area: float | None = None) -> Case:
+    """The pinch of the box seen through :data:`NOISE`; ``min_area`` overrides the
+    smallest-contact filter (``contacts.min_area``)."""
     obj = box()
-    return pinch(obj, scene(obj), "noisy masks", noise=NOISE)
+    sections = {} if min_area is None else {"contacts": {"min_area": min_area}}
+    return pinch(obj, scene(obj, **sections), "noisy masks", noise=NOISE)
 
 
 # -- random fingers (the property test) ----------------------------------------------

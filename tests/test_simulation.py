@@ -9,6 +9,7 @@ import pytest
 
 import graspenv
 from graspenv.bench.interactions import BOX, CLEARANCE, FINGER_RADIUS
+from graspenv.config import FIDELITY_PRESETS, PRESET_DRIFT_MM, load_config
 from graspenv.simulation import STAGES, Simulation
 from graspenv.surface.render import render_mask
 from graspenv.surface.scripts import two_finger_pinch
@@ -268,3 +269,23 @@ def test_particles_by_contact_and_particle_velocities(method: str) -> None:
             contacts.normal_force[np.isin(contacts.particle, ids)].sum() for ids in groups.values()
         ]
         assert min(per_finger) > 0.1
+
+
+def test_make_simulation_takes_the_environments_presets() -> None:
+    """fidelity= merges a preset over the scene; explicit overrides win over it."""
+    with graspenv.make_simulation(fidelity="fast") as sim:
+        assert sim.config.physics.substeps == FIDELITY_PRESETS["fast"]["physics"]["substeps"]
+        assert sim.config.contacts.spacing == FIDELITY_PRESETS["fast"]["contacts"]["spacing"]
+    with graspenv.make_simulation(fidelity="reference", physics={"substeps": 3}) as sim:
+        assert sim.config.physics.substeps == 3
+        assert sim.config.physics.solver_iterations == 100
+    with graspenv.make_simulation() as sim:
+        assert sim.config == load_config(None)
+    # auto picks the cheapest preset within the budget (PRESET_DRIFT_MM).
+    budget = PRESET_DRIFT_MM["fast"] + 1.0
+    with graspenv.make_simulation(fidelity="auto", error_budget=budget) as sim:
+        assert sim.config.physics.substeps == FIDELITY_PRESETS["fast"]["physics"]["substeps"]
+    with pytest.raises(ValueError, match="fidelity must be one of"):
+        graspenv.make_simulation(fidelity="best")
+    with pytest.raises(ValueError, match="needs error_budget"):
+        graspenv.make_simulation(fidelity="auto")

@@ -336,6 +336,25 @@ def scene_speed(
     return SceneSpeed(name, len(masks), scene.surface.fps, walls, bullet, stage)
 
 
+def scene_speeds(runs: int, progress: Progress) -> list[SceneSpeed]:
+    """The canonical turn at the default and ``fast`` presets and the ten-finger
+    scene at the default."""
+    base = load_config(None)
+    canonical, script = turn_scene(base)
+    hands, hands_script, _, _ = two_hands_scene(base)
+    turn_masks = _masks(canonical, script)  # the fast preset sees the same masks
+    fast = turn_scene(base.replace(**FIDELITY_PRESETS["fast"]))[0]
+    speeds = []
+    for name, scene, masks in (
+        ("turn, default", canonical, turn_masks),
+        ("turn, fast", fast, turn_masks),
+        ("two hands, default", hands, _masks(hands, hands_script)),
+    ):
+        speeds.append(scene_speed(name, scene, masks, runs))
+        progress(f"scene: {name} → {speeds[-1].realtime:.1f}× real time")
+    return speeds
+
+
 # -- environments ----------------------------------------------------------------------------
 
 
@@ -465,13 +484,17 @@ def speckle_masks(
     return masks
 
 
-def scaling(frames: int = SCALING_FRAMES, progress: Progress | None = None) -> list[ScalingPoint]:
+def scaling(
+    frames: int = SCALING_FRAMES,
+    progress: Progress | None = None,
+    counts: Sequence[int] = CONTACT_COUNTS,
+) -> list[ScalingPoint]:
     """Frame cost against contacts on the default scene (median frame after three)."""
     scene = load_config(None)
     shape = (scene.surface.resolution[1], scene.surface.resolution[0])
     points = []
     for kind, make in (("fingertips", fingertip_masks), ("speckles", speckle_masks)):
-        for count in CONTACT_COUNTS:
+        for count in counts:
             masks = make(count, frames + 3, shape)
             costs, contacts, contour, particles = [], [], [], []
             with Simulation(scene) as sim:
@@ -570,6 +593,7 @@ def run_speed(
     envs: Sequence[str] | None = None,
     with_scaling: bool = True,
     with_compile: bool = True,
+    scenes: bool = True,
 ) -> SpeedReport:
     """Every figure of the module docstring, in one run.
 
@@ -580,24 +604,14 @@ def run_speed(
         envs: environment ids (default: all).
         with_scaling: run the contact scaling.
         with_compile: time the compilation in fresh processes.
+        scenes: time the scenes.
     """
     import graspenv
 
     say = progress or (lambda _line: None)
     report = SpeedReport(machine=_machine())
-    base = load_config(None)
-    fast = base.replace(**FIDELITY_PRESETS["fast"])
-    canonical, script = turn_scene(base)
-    hands, hands_script, _, _ = two_hands_scene(base)
-    turn_masks = _masks(canonical, script)  # the fast preset sees the same masks
-    for name, scene, masks in (
-        ("turn, default", canonical, turn_masks),
-        ("turn, fast", turn_scene(fast)[0], turn_masks),
-        ("two hands, default", hands, _masks(hands, hands_script)),
-    ):
-        report.scenes.append(scene_speed(name, scene, masks, runs))
-        say(f"scene: {name} → {report.scenes[-1].realtime:.1f}× real time")
-
+    if scenes:
+        report.scenes = scene_speeds(runs, say)
     ids = list(envs or graspenv.ENV_IDS)
     if ids:
         strategies = _strategies()

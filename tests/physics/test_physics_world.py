@@ -6,6 +6,7 @@ import math
 from collections.abc import Callable
 
 import numpy as np
+import pybullet as pb
 import pytest
 
 from graspenv.physics import PhysicsWorld
@@ -239,3 +240,51 @@ def test_reset_restores_the_scene_bit_for_bit_without_leaking(
         np.testing.assert_array_equal(position, [0.0, 0.0, BOX_HEIGHT / 2])
         np.testing.assert_array_equal(quaternion, [0.0, 0.0, 0.0, 1.0])
         assert _session(world).tobytes() == fresh.tobytes()
+
+
+def test_object_states_are_read_once_a_step_and_follow_every_change(
+    world: PhysicsWorld,
+) -> None:
+    """The shared per-step read is Bullet's state: after a step, after a move, after a
+    reset and after a rebuild."""
+
+    def bullet_pose() -> tuple[np.ndarray, np.ndarray]:
+        body = world._object_bodies[world.object_index("box")]
+        position, quaternion = pb.getBasePositionAndOrientation(body, physicsClientId=world.client)
+        return np.array(position), np.array(quaternion)
+
+    first = world.object_states()
+    assert world.object_states() is first  # nothing stepped: the same read
+    world.apply_force("box", (2.0, 0.0, 0.0))
+    world.step_frame(np.zeros(0, np.int64), np.zeros((0, 2)))
+    assert world.object_states() is not first
+    np.testing.assert_array_equal(world.object_pose("box")[0], bullet_pose()[0])
+    world.set_object_state("box", (0.05, 0.02), yaw=0.3)
+    np.testing.assert_array_equal(world.object_pose("box")[0], bullet_pose()[0])
+    np.testing.assert_array_equal(world.object_pose("box")[1], bullet_pose()[1])
+    world.reset()
+    np.testing.assert_array_equal(world.object_pose("box")[0], bullet_pose()[0])
+    world.rebuild(world.scene)
+    np.testing.assert_array_equal(world.object_pose("box")[0], bullet_pose()[0])
+    with pytest.raises(ValueError):
+        world.object_states().position[0, 0] = 1.0  # read-only
+
+
+def test_pool_keeps_bullets_own_particle_states(world: PhysicsWorld) -> None:
+    """The cached positions and velocities are Bullet's exactly, or marked unknown."""
+    ids = world.pool.acquire(3)
+    world.pool.place(ids, [[0.05, 0.0, 0.002], [0.06, 0.0, 0.002], [0.07, 0.0, 0.002]])
+    position, velocity, known = world.pool.cached_states(ids)
+    assert known.all()
+    np.testing.assert_array_equal(position, world.pool.positions(ids))
+    world.step_frame(ids, [[0.04, 0.0], [0.05, 0.001], [0.07, 0.0]])
+    position, velocity, known = world.pool.cached_states(ids)
+    assert known.all()
+    bodies = world.pool.body_ids(ids).tolist()
+    bullet = [pb.getBasePositionAndOrientation(b, physicsClientId=world.client)[0] for b in bodies]
+    np.testing.assert_array_equal(position, np.array(bullet))
+    # Velocities are the last displacements over the sub-step: Bullet's to rounding.
+    moving = [pb.getBaseVelocity(b, physicsClientId=world.client)[0] for b in bodies]
+    np.testing.assert_allclose(velocity, np.array(moving), rtol=0, atol=1e-9)
+    world.step_frame(np.zeros(0, np.int64), np.zeros((0, 2)))  # a step without them
+    assert not world.pool.cached_states(ids)[2].any()

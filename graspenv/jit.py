@@ -1,7 +1,7 @@
 """The compiled hot path: numba's ``njit`` with the project's settings.
 
 Per-frame work on contours, particles, masks and contacts runs in a few compiled
-functions per frame (``docs/design.md``, "The lean frame"); Python keeps the
+functions per frame (``docs/design.md``, section 3, "The lean frame"); Python keeps the
 orchestration and every PyBullet call. Each compiled function sits in the module of
 the stage that owns it, beside its plain-numpy reference where one is kept for tests.
 

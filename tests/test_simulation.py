@@ -1,4 +1,4 @@
-"""The public contract of make_simulation / Simulation (DESIGN.md)."""
+"""The public contract of make_simulation / Simulation (docs/design.md, section 5)."""
 
 from __future__ import annotations
 

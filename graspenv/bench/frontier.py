@@ -2,7 +2,7 @@
 
 Every scenario plays a scripted synthetic hand through the whole pipeline (render →
 contours → tracking → proxies → Bullet) and measures what it did against ground
-truth (DESIGN.md, "How we measure"):
+truth (docs/design.md, "How we measure"):
 
 - ``turn``: two fingertips squeeze a 6 cm box and turn 90° in place (the canonical
   scene). Ideal rigid grasp: the box turns with the fingers about its own centre.

@@ -1,6 +1,6 @@
 """Point correspondence between a contact's previous and current contour.
 
-This is step 4 of the persistent particle proxy (Wilson, ITS 2009; see DESIGN.md):
+This is step 4 of the persistent particle proxy (Wilson, ITS 2009; docs/design.md, §2):
 which current contour point each previous point moved to, and so which particle each
 current point inherits. Pure numpy, no frames of its own: pass both contours in the
 same frame (metres, world frame in the pipeline), closed, with the same orientation,
@@ -56,16 +56,16 @@ about 128 points the exhaustive search is the cheaper, at 256 it takes twice the
 one's time (``correspond(method="auto")`` searches exhaustively up to 256 × 256
 point pairs).
 
-**Particles** (:func:`correspond`): DESIGN's rule made one-to-one. The predecessor of
-current point j is, among the previous points whose successor is j, the one with the
-smallest window cost D[k, j] (the smallest k on a tie); j has no predecessor (−1) when
-no previous point names it. Current point j reuses the particle of its predecessor;
-without one it gets a new particle. Previous point k keeps its particle exactly when
-``predecessor[successor[k]] == k``; otherwise the particle is released. So every
-previous particle goes to at most one current point and every current point has at
-most one previous particle. A new particle starts at the particle of its *anchor*: the
-nearest current point along the contour (fewest index steps, the lower-index side on
-a tie) that has a predecessor.
+**Particles** (:func:`correspond`): the rule of docs/design.md (section 2, step 4) made
+one-to-one. The predecessor of current point j is, among the previous points whose
+successor is j, the one with the smallest window cost D[k, j] (the smallest k on a tie);
+j has no predecessor (−1) when no previous point names it. Current point j reuses the
+particle of its predecessor; without one it gets a new particle. Previous point k keeps
+its particle exactly when ``predecessor[successor[k]] == k``; otherwise the particle is
+released. So every previous particle goes to at most one current point and every current
+point has at most one previous particle. A new particle starts at the particle of its
+*anchor*: the nearest current point along the contour (fewest index steps, the
+lower-index side on a tie) that has a predecessor.
 
 **Many contacts** (:func:`correspond_batch`): every contact of a frame in one call,
 each pair matched as above; the small exhaustive searches run as one batched matrix

@@ -8,7 +8,7 @@ sphere proxies. The proxies stage drives it once per camera frame:
    ``world.pool.place(ids, xyz)`` puts each particle there at z = height + radius
    (stack layer l at ``l · proxy.stack_spacing`` above). ``world.object_footprint``
    tells which points lie deeper than ``proxy.penetration_margin`` inside an
-   object's footprint (DESIGN step 7);
+   object's footprint (docs/design.md, section 2, step 7);
 2. lift-off: ``world.pool.release(ids)``;
 3. every frame: ``world.step_frame(ids, targets, spin)`` with every active particle
    (shape (K,) or (K, L) for stacks), its contour point (K, 2) and the contour's

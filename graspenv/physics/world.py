@@ -624,8 +624,9 @@ class PhysicsWorld:
     def object_footprint(self, xy: ArrayLike, margin: float = 0.0) -> FootprintHits:
         """Find points that lie inside an object's footprint by more than a margin.
 
-        The penetration limit (DESIGN step 7) uses this: a contact point deep inside
-        an object's footprint goes on the object's top face, not against its side.
+        The penetration limit (docs/design.md, section 2, step 7) uses this: a contact
+        point deep inside an object's footprint goes on the object's top face, not
+        against its side.
         Footprints follow the objects' current poses (a tipped box or a lying
         cylinder has the shadow it casts now).
 

@@ -11,7 +11,7 @@ OUT    ?= runs/demo
 POLICY ?= agents/policies/TurnInPlace-sac
 EPISODES ?= 100
 
-.PHONY: demo test lint typecheck pytest slow train-deps baselines compare clean
+.PHONY: demo test lint typecheck pytest slow train-deps baselines compare speed clean
 
 $(VENV)/bin/python:
 	$(PYTHON) -m venv $(VENV)
@@ -61,6 +61,11 @@ train-deps: $(VENV)/.train
 baselines: $(VENV)/.train
 	$(VENV)/bin/graspenv train --env graspenv/TurnInPlace-v0 --algo sac --seed 0
 	$(VENV)/bin/graspenv train --env graspenv/SqueezeSlide-v0 --algo sac --seed 0
+
+# The speed table in the README: whole-run speeds, env steps/s beside panda-gym (in
+# the dev extra), resets, frame cost against contacts, compile times (about 2 min).
+speed: $(VENV)/.dev
+	$(VENV)/bin/graspenv bench --speed --out runs/speed
 
 # The strategy benchmark in the README.
 compare: $(VENV)/.train

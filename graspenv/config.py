@@ -25,6 +25,7 @@ from typing import Any, Literal, TypeVar
 __all__ = [
     "FIDELITY_PRESETS",
     "PRESET_DRIFT_MM",
+    "SPECK_AREA",
     "ConfigError",
     "ContactConfig",
     "ObjectConfig",
@@ -39,6 +40,10 @@ __all__ = [
     "resolve_fidelity",
     "scene_from",
 ]
+
+#: The specks ``contacts.min_area = "auto"`` drops: smaller than four pixels of the
+#: default 0.61 × 0.46 m table at 640 × 480, m².
+SPECK_AREA = 4.0 * (0.61 / 640) * (0.46 / 480)
 
 #: Particle sphere radius, metres, by default (``proxy.particle_radius``).
 DEFAULT_PARTICLE_RADIUS = 0.002
@@ -90,25 +95,35 @@ class ContactConfig:
             its id from one frame to the next.
         min_area: components with fewer pixels than this are dropped as sensor
             noise, as table software drops specks below a minimum blob size (0 keeps
-            single pixels). The default, 4 pixels (3.6 mm² on the default table),
-            removes isolated flipped pixels and most pairs, while the smallest real
-            contact, a light 5 mm fingertip, covers about 85; measured on the
-            canonical turn with 0.05 % of pixels flipped, the filter takes the
-            specks from 153 to 0 contacts a frame and the turn's error from 30° to
-            0.3° (README, "Frame cost against contacts"). It is in pixels: scale it
-            with the resolution.
+            single pixels); or ``"auto"``: :data:`SPECK_AREA` (3.65 mm², four pixels
+            of the default 640 × 480 table) in this table's pixels, so the filter
+            keeps its size in millimetres when the resolution changes. On the default
+            table it removes isolated flipped pixels and most pairs, while the
+            smallest real contact, a light 5 mm fingertip, covers about 85 pixels:
+            measured on the canonical turn with 0.05 % of pixels flipped, it takes
+            the specks from 153 to 0 contacts a frame and the turn's error from 30°
+            to 0.3°. At 320 × 240 it is one pixel and drops nothing: there a
+            fingertip cut by dropout holes leaves fragments of a few pixels that
+            matter to the grip (README, "Frame cost against contacts").
     """
 
     spacing: float | Literal["auto"] = "auto"
     match_radius: float = 0.03
-    min_area: float = 4.0
+    min_area: float | Literal["auto"] = "auto"
 
     def __post_init__(self) -> None:
         if self.spacing != "auto":
             _positive("contacts.spacing", (self.spacing,))
         _positive("contacts.match_radius", (self.match_radius,))
-        if self.min_area < 0:
-            raise ConfigError(f"contacts.min_area must be >= 0, got {self.min_area}")
+        if self.min_area != "auto" and self.min_area < 0:
+            raise ConfigError(f"contacts.min_area must be >= 0 or 'auto', got {self.min_area}")
+
+    def min_area_pixels(self, pixel_area: float) -> float:
+        """The smallest component kept, pixels, on a table whose pixels cover
+        ``pixel_area`` m² (:attr:`min_area`, ``"auto"`` resolved)."""
+        if isinstance(self.min_area, str):
+            return SPECK_AREA / pixel_area
+        return self.min_area
 
     def contour_spacing(self, particle_radius: float = DEFAULT_PARTICLE_RADIUS) -> float:
         """The spacing in metres: ``spacing``, or one diameter of particles of this

@@ -256,6 +256,7 @@ class ContactTracker:
         self.config = (config if config is not None else ContactConfig()).resolved()
         self._spacing = self.config.contour_spacing()
         self._pixel_area = float(np.prod(surface.pixel_size))
+        self._min_area = float(self.config.min_area_pixels(self._pixel_area))
         # Pixels to world (Surface.pixel_to_world): x = (c + 0.5)·sx − w/2,
         # y = h/2 − (r + 0.5)·sy.
         sx, sy = surface.pixel_size
@@ -291,7 +292,7 @@ class ContactTracker:
         chains, chain_bounds = traced_chains(image)
         (ids, is_new, centroids, areas, outlines, outline_bounds, contours, contour_bounds,
          origins, merged_into, removed) = _track_frame(
-            chains, chain_bounds, image.shape[1], float(self.config.min_area),
+            chains, chain_bounds, image.shape[1], self._min_area,
             self._transform, before.centroids, before.outlines, before.outline_bounds,
             before.contact_ids, before.contours, before.contour_bounds,
             self.config.match_radius, self._spacing, self._next_id,

@@ -112,6 +112,20 @@ def test_min_area_drops_noise(surface: Surface) -> None:
     assert frame.contacts[0].area > 5.0 * float(np.prod(surface.pixel_size))
 
 
+@pytest.mark.parametrize(("resolution", "kept"), [((640, 480), 1), ((320, 240), 3)])
+def test_auto_min_area_keeps_its_size_in_millimetres(
+    resolution: tuple[int, int], kept: int
+) -> None:
+    """ "auto" drops specks under 3.65 mm²: four pixels at 640 × 480, one at 320 × 240."""
+    surface = Surface(resolution=resolution)
+    tracker = ContactTracker(surface, ContactConfig())  # min_area = "auto"
+    mask = np.zeros(surface.shape, np.uint8)
+    mask[10, 10] = 255  # 1 pixel
+    mask[30, 30:32] = 255  # 2 pixels
+    mask[50:52, 50:52] = 255  # 4 pixels
+    assert len(tracker.update(mask)) == kept
+
+
 @pytest.mark.parametrize(
     ("mask", "fragment"),
     [

@@ -58,6 +58,7 @@ def compare_bench(before: Path, after: Path) -> tuple[list[str], int]:
         "|---|---|---|---|---|---|",
     ]
     beyond = 0
+    signs = {"worse": 0, "better": 0, "equal": 0}
     for key in sorted(set(a) & set(b)):
         for name in sorted(a[key]):
             if not name.startswith("abs_"):
@@ -68,6 +69,13 @@ def compare_bench(before: Path, after: Path) -> tuple[list[str], int]:
             if any(v is None or math.isnan(v) for v in values):
                 continue
             before_mean, before_max, after_mean, after_max = (float(v) for v in values)  # type: ignore[arg-type]
+            signs[
+                "worse"
+                if after_mean > before_mean
+                else "better"
+                if after_mean < before_mean
+                else "equal"
+            ] += 1
             verdict = "within spread"
             if after_mean > before_max + 1e-12:  # worse on average than any placement was
                 verdict = "**worse, beyond spread**"
@@ -78,6 +86,12 @@ def compare_bench(before: Path, after: Path) -> tuple[list[str], int]:
                 f"| {key[0]} | {key[1]} | {error} | {before_mean:.4g} ({before_max:.4g}) | "
                 f"{after_mean:.4g} ({after_max:.4g}) | {verdict} |"
             )
+    # A systematic change moves most figures one way; chaos moves them both ways.
+    lines.append("")
+    lines.append(
+        f"Mean |error| after against before: worse in {signs['worse']}, better in "
+        f"{signs['better']}, equal in {signs['equal']} of {sum(signs.values())} figures."
+    )
     return lines, beyond
 
 

@@ -68,9 +68,12 @@ point has at most one previous particle. A new particle starts at the particle o
 lower-index side on a tie) that has a predecessor.
 
 **Many contacts** (:func:`correspond_batch`): every contact of a frame in one call,
-each pair matched as above; the small exhaustive searches run as one batched matrix
-product over the pairs padded to the largest, so ten fingertips take the same few
-dozen numpy calls as one.
+each pair matched as above. The exhaustive searches of pairs up to 96 × 96 points
+(fingertips, the per-frame case) run in one compiled call that sums every window cost
+directly, so its costs are exact and equal costs go to the smallest j; it agrees with
+the blocked product of :func:`match_exhaustive`, which larger pairs use, wherever
+rounding does not decide a tie (``tests/contacts/test_kernels.py``). The particle
+bookkeeping below is compiled too.
 """
 
 from __future__ import annotations
@@ -652,11 +655,8 @@ def correspond_batch(
     Contour pair c is ``previous[previous_bounds[c]:previous_bounds[c + 1]]`` and
     ``current[current_bounds[c]:current_bounds[c + 1]]``; each pair is matched on its
     own, as :func:`correspond` matches it, but the small exhaustive searches
-    (fingertips: the per-frame case) run as one batched matrix product, so a frame
-    costs the same few dozen numpy calls however many fingers touch. The product's
-    rounding depends on the padded size, so where two candidates cost exactly the
-    same a pair may pick the other one than on its own (seen once in about 11 000
-    random pairs, with every cost of the pair equal).
+    (fingertips: the per-frame case) run in one compiled call (module docstring), so a
+    frame costs a few calls however many fingers touch.
 
     Args:
         previous: the previous contours one after another, shape (N, 2), metres.

@@ -171,3 +171,33 @@ def test_tracker_cost_grows_linearly_with_speckles(surface: Surface) -> None:
         frame = tracker.update(mask)
         assert len(frame) == len(find_components_batch(mask)[0]) > 900
         assert len(set(frame.ids)) == len(frame)
+
+
+def test_direct_exhaustive_search_matches_the_blocked_product() -> None:
+    """The compiled search of small pairs names the same successors as
+    match_exhaustive's matrix product (random contours: no exact ties)."""
+    rng = np.random.default_rng(5)
+    for _ in range(500):
+        pairs = int(rng.integers(1, 5))
+        previous, current = [], []
+        for _ in range(pairs):
+            n = int(rng.integers(3, 60))
+            m = max(3, n + int(rng.integers(-3, 4)))
+            t = np.linspace(0.0, 2 * np.pi, n, endpoint=False) + rng.uniform(0, 1)
+            u = np.linspace(0.0, 2 * np.pi, m, endpoint=False) + rng.uniform(-0.3, 0.3)
+            radius = rng.uniform(0.005, 0.012)
+            previous.append(radius * np.column_stack([np.cos(t), np.sin(t)]))
+            current.append(
+                radius * rng.uniform(0.9, 1.1) * np.column_stack([np.cos(u), np.sin(u)])
+                + rng.normal(size=2) * 0.002
+            )
+        p_bounds = np.cumsum([0] + [len(p) for p in previous]).astype(np.intp)
+        q_bounds = np.cumsum([0] + [len(q) for q in current]).astype(np.intp)
+        window = int(rng.integers(0, 7))
+        match = matching.correspond_batch(
+            np.concatenate(previous), p_bounds, np.concatenate(current), q_bounds, window,
+            "exhaustive",
+        )  # fmt: skip
+        for c, (p, q) in enumerate(zip(previous, current, strict=True)):
+            expected = matching.match_exhaustive(p, q, window) + q_bounds[c]
+            np.testing.assert_array_equal(match.successor[p_bounds[c] : p_bounds[c + 1]], expected)

@@ -3,6 +3,7 @@ next process (graspenv/jit.py)."""
 
 from __future__ import annotations
 
+import ast
 import json
 import os
 import subprocess
@@ -39,3 +40,35 @@ def test_kernels_compile_once_and_load_from_the_cache_in_the_next_process(
     assert any(tmp_path.rglob("*.nbi"))
     second = _run(tmp_path)
     assert second == {"hits": 1, "misses": 0}  # loaded, not compiled
+
+
+# numba compiles these only with SciPy's BLAS and LAPACK, which graspenv does not
+# depend on: a kernel using one works where SciPy happens to be installed (the dev
+# tools bring it) and fails everywhere else.
+_NEEDS_SCIPY = {"dot", "vdot", "cross", "matmul", "inner", "outer", "linalg", "einsum"}
+
+
+def _compiled_functions() -> list[tuple[str, ast.FunctionDef]]:
+    found = []
+    for path in sorted(Path("graspenv").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.FunctionDef) and any(
+                isinstance(d, ast.Name) and d.id == "njit" for d in node.decorator_list
+            ):
+                found.append((f"{path}:{node.name}", node))
+    return found
+
+
+def test_compiled_kernels_need_no_scipy() -> None:
+    kernels = _compiled_functions()
+    assert len(kernels) > 20  # the scan finds them
+    for where, node in kernels:
+        for inner in ast.walk(node):
+            if isinstance(inner, ast.BinOp):
+                assert not isinstance(inner.op, ast.MatMult), f"{where} uses @"
+            if (
+                isinstance(inner, ast.Attribute)
+                and isinstance(inner.value, ast.Name)
+                and inner.value.id == "np"
+            ):
+                assert inner.attr not in _NEEDS_SCIPY, f"{where} uses np.{inner.attr}"

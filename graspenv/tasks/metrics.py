@@ -407,6 +407,29 @@ def _plane(
     return nx, ny, nz, nx * points[a, 0] + ny * points[a, 1] + nz * points[a, 2]
 
 
+# Vector helpers for the compiled hull: numba's np.dot, np.cross and np.linalg need
+# SciPy's BLAS and LAPACK, which graspenv does not depend on.
+
+
+@njit
+def _dot3(u: NDArray[np.float64], v: NDArray[np.float64]) -> float:
+    return float(u[0] * v[0] + u[1] * v[1] + u[2] * v[2])
+
+
+@njit
+def _length(u: NDArray[np.float64]) -> float:
+    return float(np.sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]))
+
+
+@njit
+def _cross3(u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
+    out = np.empty(3)
+    out[0] = u[1] * v[2] - u[2] * v[1]
+    out[1] = u[2] * v[0] - u[0] * v[2]
+    out[2] = u[0] * v[1] - u[1] * v[0]
+    return out
+
+
 @njit
 def _convex_hull_normals(
     points: NDArray[np.float64], tol: float
@@ -434,27 +457,27 @@ def _convex_hull_normals(
     centre /= count
     spread = np.empty(count)
     for i in range(count):
-        spread[i] = np.linalg.norm(points[i] - centre)
+        spread[i] = _length(points[i] - centre)
     i0 = int(np.argmax(spread))
     far = np.empty(count)
     for i in range(count):
-        far[i] = np.linalg.norm(points[i] - points[i0])
+        far[i] = _length(points[i] - points[i0])
     i1 = int(np.argmax(far))
     axis = points[i1] - points[i0]
-    axis_length = np.linalg.norm(axis)
+    axis_length = _length(axis)
     if axis_length <= tol:
         return none, _FLAT
     off_line = np.empty(count)
     for i in range(count):
-        off_line[i] = np.linalg.norm(np.cross(points[i] - points[i0], axis)) / axis_length
+        off_line[i] = _length(_cross3(points[i] - points[i0], axis)) / axis_length
     i2 = int(np.argmax(off_line))
     if off_line[i2] <= tol:
         return none, _FLAT
-    plane = np.cross(axis, points[i2] - points[i0])
-    plane /= np.linalg.norm(plane)
+    plane = _cross3(axis, points[i2] - points[i0])
+    plane /= _length(plane)
     height = np.empty(count)
     for i in range(count):
-        height[i] = np.dot(points[i] - points[i0], plane)
+        height[i] = _dot3(points[i] - points[i0], plane)
     i3 = int(np.argmax(np.abs(height)))
     if abs(height[i3]) <= tol:
         return none, _FLAT
@@ -546,10 +569,10 @@ def _convex_hull_normals(
     for f in range(len(result)):
         if not np.all(np.isfinite(result[f])):
             return none, _BROKEN
-        if np.dot(result[f], interior) - result_offsets[f] >= 0.0:
+        if _dot3(result[f], interior) - result_offsets[f] >= 0.0:
             return none, _BROKEN
         for i in range(count):
-            if np.dot(result[f], points[i]) - result_offsets[f] > 100.0 * tol:
+            if _dot3(result[f], points[i]) - result_offsets[f] > 100.0 * tol:
                 return none, _BROKEN
     return result, _HULL
 

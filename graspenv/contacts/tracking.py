@@ -161,11 +161,14 @@ class ContactFrame:
     @classmethod
     def empty(cls, index: int = 0, removed: tuple[int, ...] = ()) -> ContactFrame:
         """A frame without contacts."""
-        bounds = np.zeros(1, np.intp)
-        none = np.zeros(0, np.int64)
+        # Read-only like every frame's arrays: the compiled stages would otherwise
+        # compile a second version of themselves for writable ones.
+        bounds = _frozen(np.zeros(1, np.intp))
+        none = _frozen(np.zeros(0, np.int64))
+        points = _frozen(np.zeros((0, 2)))
         return cls(
-            index, none, np.zeros(0, bool), np.zeros((0, 2)), np.zeros(0), np.zeros((0, 2)),
-            bounds, np.zeros((0, 2)), bounds, removed, none, none, np.zeros(0, np.intp),
+            index, none, _frozen(np.zeros(0, bool)), points, _frozen(np.zeros(0)), points,
+            bounds, points, bounds, removed, none, none, _frozen(np.zeros(0, np.intp)),
         )  # fmt: skip
 
     @property

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from graspenv.bench.interactions import pinch
 from graspenv.config import ObjectConfig, SceneConfig, load_config
 from graspenv.contacts.tracking import ContactFrame
-from graspenv.geometry import rotate, yaw_of
+from graspenv.geometry import footprint, yaw_of
 from graspenv.simulation import Simulation
 from graspenv.surface.render import render_mask
 from graspenv.surface.scripts import Script
@@ -35,23 +35,12 @@ from graspenv.viz import (
     write_animation,
 )
 
-__all__ = ["DemoResult", "footprint", "pinch_script", "run_demo"]
+__all__ = ["DemoResult", "pinch_script", "run_demo"]
 
 # How far each finger pushes into the box's face once squeezing, and the moves.
 DEPTH = 0.003
 TURN = math.pi / 2
 SLIDE = (0.10, 0.0)
-
-
-def footprint(obj: ObjectConfig, position: NDArray[np.float64], yaw: float) -> NDArray[np.float64]:
-    """An object's outline seen from above, metres, world frame, shape (N, 2)."""
-    if obj.shape == "box":
-        hx, hy = obj.size[0] / 2, obj.size[1] / 2
-        local = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
-    else:
-        angle = np.linspace(0.0, 2 * math.pi, 48, endpoint=False)
-        local = obj.size[0] * np.column_stack([np.cos(angle), np.sin(angle)])
-    return rotate(local, yaw) + position[:2]
 
 
 def pinch_script(obj: ObjectConfig) -> Script:

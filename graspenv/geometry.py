@@ -8,11 +8,13 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from graspenv.config import ObjectConfig
 from graspenv.jit import njit
 
 __all__ = [
     "SHAPE_CODES",
     "convex_hull",
+    "footprint",
     "footprint_depths",
     "rotate",
     "tilt_angle",
@@ -30,6 +32,17 @@ def rotate(points: NDArray[np.float64], angle: float) -> NDArray[np.float64]:
     """Points turned counter-clockwise by ``angle`` radians about the origin, (N, 2)."""
     c, s = math.cos(angle), math.sin(angle)
     return np.asarray(points, dtype=float) @ np.array([[c, s], [-s, c]])
+
+
+def footprint(obj: ObjectConfig, position: NDArray[np.float64], yaw: float) -> NDArray[np.float64]:
+    """An object's outline seen from above, metres, world frame, shape (N, 2)."""
+    if obj.shape == "box":
+        hx, hy = obj.size[0] / 2, obj.size[1] / 2
+        local = np.array([[-hx, -hy], [hx, -hy], [hx, hy], [-hx, hy]])
+    else:
+        angle = np.linspace(0.0, 2 * math.pi, 48, endpoint=False)
+        local = obj.size[0] * np.column_stack([np.cos(angle), np.sin(angle)])
+    return rotate(local, yaw) + position[:2]
 
 
 def tilt_angle(quaternion: Sequence[float] | NDArray[np.float64]) -> float:

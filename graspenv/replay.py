@@ -38,8 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import SceneConfig, load_config, to_dict
-from graspenv.demo import footprint
-from graspenv.geometry import yaw_of
+from graspenv.geometry import footprint, yaw_of
 from graspenv.simulation import STAGES, FrameReport, Simulation, make_simulation
 from graspenv.viz import (
     draw_mask,

@@ -30,8 +30,7 @@ from graspenv.config import (
     resolve_fidelity,
     scene_from,
 )
-from graspenv.demo import footprint
-from graspenv.geometry import yaw_of
+from graspenv.geometry import footprint, yaw_of
 from graspenv.simulation import Simulation
 from graspenv.surface.controller import ActionMode, ControllerConfig, FingerController
 from graspenv.surface.render import render_mask

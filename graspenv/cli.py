@@ -166,6 +166,11 @@ def _bench(args: argparse.Namespace) -> int:
     if args.speed:
         from graspenv.bench.speed import run_speed
 
+        if args.runs < 1 or args.env_steps < 1:
+            raise ValueError(
+                f"--runs and --env-steps must be at least 1, got {args.runs} and {args.env_steps}"
+            )
+
         report = run_speed(_say, runs=args.runs, env_steps=args.env_steps)
         print(report.markdown())
         for path in report.write(Path(args.out)):

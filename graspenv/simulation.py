@@ -280,7 +280,7 @@ class Simulation:
             scene: the scene for the new episode (objects may differ in number,
                 shape, size, mass and friction; any section may change), or ``None``
                 to put the current one back. With a scene, the physics world is
-                rebuilt (:meth:`PhysicsWorld.rebuild`: 12–30 ms with the default
+                rebuilt (:meth:`PhysicsWorld.rebuild`: 1–3 ms with the default
                 pool batch), and so are the contact tracker and the proxies; the
                 results are then bit-identical to a new ``Simulation(scene)`` fed the
                 same masks, whatever ran before, also when the scene equals

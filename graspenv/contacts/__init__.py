@@ -1,5 +1,6 @@
 """Contacts: mask components, their outer contours, even resampling, frame-to-frame
-tracking, and the persistent proxy's point correspondence (numpy and cv2 only).
+tracking, and the persistent proxy's point correspondence (numpy, cv2 and compiled
+kernels; no physics).
 
 Typical use, one camera frame at a time::
 

@@ -1,9 +1,10 @@
 """Connected components of a contact mask and their outer outlines, in pixels.
 
 One pass of OpenCV's border following (``cv2.findContours`` with ``RETR_EXTERNAL``
-and ``CHAIN_APPROX_NONE``) gives every component's outer boundary; ``cv2.moments`` of
-that boundary gives its area and centroid. This is far cheaper than labelling the
-image (``connectedComponentsWithStats``) and is what the tracker runs every frame.
+and ``CHAIN_APPROX_NONE``) gives every component's outer boundary; its contour
+moments, computed as ``cv2.moments`` computes them, give its area and centroid. This
+is far cheaper than labelling the image (``connectedComponentsWithStats``) and is
+what the tracker runs every frame.
 
 Pixel frame: (column, row), pixel centres at integers, rows going down (see
 :class:`graspenv.surface.geometry.Surface`).
@@ -64,7 +65,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.contacts.resample import bounds_of
+from graspenv.contacts.resample import bounds_of, gather
 from graspenv.jit import njit
 
 __all__ = [
@@ -244,7 +245,7 @@ def components(
     areas, centroids, keys = _measure_chains(all_chains, all_bounds, width)
     kept = np.flatnonzero(areas >= min_area)
     order = kept[np.argsort(keys[kept], kind="mergesort")]
-    chains, chain_bounds = _gather(all_chains, all_bounds, order)
+    chains, chain_bounds = gather(all_chains, all_bounds, order)
     outlines, bounds = _outlines(chains.astype(np.float64), chain_bounds)
     return chains, chain_bounds, outlines, bounds, areas[order], centroids[order]
 
@@ -350,25 +351,6 @@ def _measure_chains(
             centroids[c, 1] = sum_y / size
         areas[c] = enclosed + 0.5 * size + 1.0 if size > 1 else 1.0
     return areas, centroids, keys
-
-
-@njit
-def _gather(
-    chains: NDArray[np.int32], bounds: NDArray[np.intp], order: NDArray[np.intp]
-) -> tuple[NDArray[np.int32], NDArray[np.intp]]:
-    """The chains ``order`` names, in that order, laid end to end."""
-    sizes = np.empty(len(order), np.intp)
-    for k in range(len(order)):
-        sizes[k] = bounds[order[k] + 1] - bounds[order[k]]
-    out_bounds = np.zeros(len(order) + 1, np.intp)
-    out_bounds[1:] = np.cumsum(sizes)
-    out = np.empty((out_bounds[-1], 2), np.int32)
-    for k in range(len(order)):
-        lo = bounds[order[k]]
-        for i in range(sizes[k]):
-            out[out_bounds[k] + i, 0] = chains[lo + i, 0]
-            out[out_bounds[k] + i, 1] = chains[lo + i, 1]
-    return out, out_bounds
 
 
 @njit

@@ -2,7 +2,7 @@
 
 This is step 4 of the persistent particle proxy (Wilson, ITS 2009; docs/design.md, §2):
 which current contour point each previous point moved to, and so which particle each
-current point inherits. Pure numpy, no frames of its own: pass both contours in the
+current point inherits. Numpy and compiled kernels, no frames of its own: pass both contours in the
 same frame (metres, world frame in the pipeline), closed, with the same orientation,
 each resampled evenly (their counts N and M may differ).
 

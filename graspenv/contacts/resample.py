@@ -19,6 +19,7 @@ G = TypeVar("G", bound=np.generic)
 
 __all__ = [
     "bounds_of",
+    "checked_bounds",
     "gather",
     "orient_ccw",
     "orient_ccw_batch",
@@ -55,13 +56,29 @@ def owners_of(bounds: NDArray[np.intp]) -> tuple[NDArray[np.intp], NDArray[np.in
     return owner, np.arange(bounds[-1]) - bounds[owner]
 
 
+def checked_bounds(bounds: ArrayLike, total: int, name: str = "bounds") -> NDArray[np.intp]:
+    """``bounds`` of arrays laid end to end over ``total`` rows (:func:`bounds_of`)
+    as an intp array, or a ValueError: the compiled kernels do not check indices, so
+    every public batch function checks its bounds here first."""
+    array = np.asarray(bounds)
+    if array.ndim != 1 or len(array) < 1 or not np.issubdtype(array.dtype, np.integer):
+        raise ValueError(f"{name} must be a 1-D integer array, got {array!r}")
+    if array[0] != 0 or array[-1] != total or np.any(np.diff(array) <= 0):
+        raise ValueError(
+            f"{name} must rise strictly from 0 to {total} (the number of points), got "
+            f"{array.tolist()}"
+        )
+    return array.astype(np.intp, copy=False)
+
+
 @njit
 def gather(
     points: NDArray[G], bounds: NDArray[np.intp], order: NDArray[np.intp]
 ) -> tuple[NDArray[G], NDArray[np.intp]]:
     """Some of several arrays laid end to end (:func:`bounds_of`), in a new order.
 
-    Compiled for any dtype and row shape (one machine code per combination).
+    Compiled for any dtype and row shape (one machine code per combination), for the
+    per-frame stages: its indices are not checked (see :func:`checked_bounds`).
 
     Args:
         points: the arrays one after another, shape (T, ...).
@@ -145,7 +162,11 @@ def orient_ccw_batch(points: NDArray[np.float64], bounds: NDArray[np.intp]) -> N
         are unchanged; the others reversed with their first vertex kept first). The
         input itself when every polyline already runs counter-clockwise.
     """
-    oriented, changed = orient_ccw_kernel(np.ascontiguousarray(points, dtype=np.float64), bounds)
+    points = np.asarray(points, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 2:
+        raise ValueError(f"points must have shape (T, 2), got {points.shape}")
+    bounds = checked_bounds(bounds, len(points))
+    oriented, changed = orient_ccw_kernel(np.ascontiguousarray(points), bounds)
     return oriented if changed else points
 
 
@@ -222,10 +243,10 @@ def resample_closed_batch(
 ) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
     """:func:`resample_closed` for many closed polylines in one pass.
 
-    The per-frame path: every contact of a frame is resampled by the same fixed
-    sequence of numpy calls, however many there are. Polyline c gives exactly what
-    ``resample_closed(points[bounds[c]:bounds[c + 1]], spacing, starts[c])`` gives, up
-    to rounding in the last bits (its arc lengths are measured along all of them).
+    The per-frame path: every contact of a frame is resampled in one compiled call,
+    however many there are; polyline c gives exactly what
+    ``resample_closed(points[bounds[c]:bounds[c + 1]], spacing, starts[c])`` gives
+    (arc lengths are measured along each polyline from its own first vertex).
 
     Args:
         points: the polylines' vertices one after another, shape (T, 2), each closed,
@@ -241,18 +262,23 @@ def resample_closed_batch(
         another, shape (R, 2), and their bounds, shape (C + 1,).
 
     Raises:
-        ValueError: a non-positive spacing or a polyline of zero perimeter.
+        ValueError: malformed points, bounds or starts, a non-positive spacing or a
+            polyline of zero perimeter.
     """
     if not (np.isfinite(spacing) and spacing > 0.0):
         raise ValueError(f"spacing must be finite and > 0, got {spacing}")
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    if points.ndim != 2 or points.shape[1] != 2 or not np.isfinite(points).all():
+        raise ValueError(f"points must be finite with shape (T, 2), got {points.shape}")
+    bounds = checked_bounds(bounds, len(points))
     if starts is None:
         starts = np.full((len(bounds) - 1, 2), np.nan)
-    resampled, resampled_bounds = resample_kernel(
-        np.ascontiguousarray(points, dtype=np.float64),
-        np.asarray(bounds, dtype=np.intp),
-        float(spacing),
-        np.ascontiguousarray(starts, dtype=np.float64),
-    )
+    starts = np.ascontiguousarray(starts, dtype=np.float64)
+    if starts.shape != (len(bounds) - 1, 2):
+        raise ValueError(
+            f"starts must have shape ({len(bounds) - 1}, 2), one row a polyline, got {starts.shape}"
+        )
+    resampled, resampled_bounds = resample_kernel(points, bounds, float(spacing), starts)
     if resampled_bounds[0] < 0:
         raise ValueError("polyline has zero perimeter; it needs at least two distinct points")
     return resampled, resampled_bounds

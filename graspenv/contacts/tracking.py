@@ -397,6 +397,8 @@ def _track_frame(
             if parent[c] >= 0:
                 origins[c] = prev_ids[parent[c]]
     contours, contour_bounds = resample_kernel(outlines, bounds, spacing, starts)
+    if contour_bounds[0] < 0:  # cannot happen: every outline encloses an area
+        raise ValueError("a contact outline has zero perimeter")
     order = np.argsort(ids, kind="mergesort")
     rank = np.empty(count, np.intp)
     rank[order] = np.arange(count)

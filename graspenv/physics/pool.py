@@ -246,7 +246,7 @@ class ParticlePool:
         Returns:
             Positions, metres, world frame, shape (n, 3).
         """
-        position, known = self.cached_states(ids)[::2]
+        position, _, known = self.cached_states(ids)
         c = self._client
         get = pb.getBasePositionAndOrientation
         bodies = self._bodies[np.asarray(ids, dtype=np.int64).reshape(-1)]
@@ -293,8 +293,9 @@ class ParticlePool:
         self, ids: ArrayLike
     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
         """Positions and velocities recorded at the end of the last frame (or at
-        :meth:`place`), if nothing stepped since: Bullet's own values, exactly, without
-        asking it.
+        :meth:`place`), if nothing stepped since, without asking Bullet: the positions
+        are Bullet's own to the bit; the velocities are the last sub-step's
+        displacement over its duration, Bullet's to rounding (see ``step_frame``).
 
         Args:
             ids: particle ids, shape (n,).

@@ -343,8 +343,8 @@ class PhysicsWorld:
         :class:`PhysicsWorld` builds it, so body ids, broadphase pair order and every
         later result are bit-identical to those of ``PhysicsWorld(scene)`` given the
         same commands, by construction. It costs about as much as building the
-        particle pool's first batch (``physics.pool_batch`` bodies; 12–30 ms in all
-        for the default 64 on this machine, 5 ms for a batch of 8); :meth:`reset`
+        particle pool's first batch (``physics.pool_batch`` bodies; 1–3 ms in all
+        for the default 64 on this machine, with no body sync); :meth:`reset`
         puts the same scene back in 0.05 ms, but without that guarantee.
 
         Every particle id and rigid proxy handle handed out before is invalid
@@ -468,7 +468,8 @@ class PhysicsWorld:
             yaw: rotation about +z, radians; the object is stood upright with this
                 yaw (any tilt is dropped).
             orientation: instead of ``yaw``, any orientation as a quaternion
-                (x, y, z, w), normalised here, shape (4,) (a tipped object).
+                (x, y, z, w), normalised here, shape (4,) (a tipped object; give its
+                ``position`` as (x, y, z), since (x, y) rests an upright one).
             linear_velocity: m/s, world frame, shape (3,).
             angular_velocity: rad/s, world frame, shape (3,).
             rolling: for a sphere on the table: set the angular velocity so that it
@@ -805,22 +806,22 @@ class PhysicsWorld:
         raised = bottom_z > self.pool.radius + REST_TOLERANCE
         if np.any(raised):
             rest_z[raised] += self._support_heights(x[drive.is_bottom][raised])
-        state = [x, v]
 
         def drive_particles(substep: int) -> None:
-            velocity = drive.velocities(substep, state[0], state[1], rest_z)
+            velocity = drive.velocities(substep, x, v, rest_z)
             for body, linear, spin_of in zip(bodies, velocity.tolist(), angular, strict=True):
                 set_velocity(body, linear, spin_of, client)
 
         def observe() -> None:
+            nonlocal x, v
             moved = read_positions()
-            state[1] = (moved - state[0]) / h
-            state[0] = moved
+            v = (moved - x) / h
+            x = moved
 
         self._substeps(h, drive_particles, observe)
-        self.pool.record_states(flat, state[0], state[1])
+        self.pool.record_states(flat, x, v)
         self.pool.set_last_targets(flat, goal)
-        return state[0].reshape(*np.shape(particles), 3)
+        return x.reshape(*np.shape(particles), 3)
 
     def step_bodies(self, handles: ArrayLike, goals: ArrayLike, dt: float | None = None) -> None:
         """Advance one camera frame, driving rigid proxy bodies to their goal poses.

@@ -9,8 +9,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.contacts.tracking import ContactFrame
+from graspenv.jit import njit
 
-__all__ = ["ProxyCommand", "ProxyMethod", "rigid_rotation"]
+__all__ = ["ProxyCommand", "ProxyMethod", "rigid_rotation", "rotation_kernel"]
 
 
 @dataclass(frozen=True)
@@ -74,12 +75,35 @@ def rigid_rotation(before: NDArray[np.float64], after: NDArray[np.float64]) -> f
     Returns:
         radians, counter-clockwise; 0 for fewer than two points.
     """
-    if len(before) < 2:
+    before = np.ascontiguousarray(before, dtype=np.float64)
+    after = np.ascontiguousarray(after, dtype=np.float64)
+    if before.shape != after.shape or before.ndim != 2 or before.shape[1] != 2:
+        raise ValueError(
+            f"before and after must both have shape (N, 2), got {before.shape} and {after.shape}"
+        )
+    return rotation_kernel(before, after)
+
+
+@njit
+def rotation_kernel(before: NDArray[np.float64], after: NDArray[np.float64]) -> float:
+    """:func:`rigid_rotation`, compiled, for checked (N, 2) arrays (the per-frame hand
+    turn): sums in point order."""
+    n = len(before)
+    if n < 2:
         return 0.0
-    a = before - before.mean(axis=0)
-    b = after - after.mean(axis=0)
-    cross = float(np.sum(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]))
-    dot = float(np.sum(a * b))
+    bx, by, ax, ay = 0.0, 0.0, 0.0, 0.0
+    for i in range(n):
+        bx += before[i, 0]
+        by += before[i, 1]
+        ax += after[i, 0]
+        ay += after[i, 1]
+    bx, by, ax, ay = bx / n, by / n, ax / n, ay / n
+    cross, dot = 0.0, 0.0
+    for i in range(n):
+        px, py = before[i, 0] - bx, before[i, 1] - by
+        qx, qy = after[i, 0] - ax, after[i, 1] - ay
+        cross += px * qy - py * qx
+        dot += px * qx + py * qy
     if cross == 0.0 and dot == 0.0:
         return 0.0
     return float(np.arctan2(cross, dot))

@@ -53,7 +53,7 @@ from graspenv.contacts.resample import bounds_of, gather, resample_kernel
 from graspenv.contacts.tracking import ContactFrame
 from graspenv.jit import njit
 from graspenv.physics.world import PhysicsWorld
-from graspenv.proxies.base import ProxyCommand
+from graspenv.proxies.base import ProxyCommand, rotation_kernel
 
 __all__ = ["PersistentProxies"]
 
@@ -443,7 +443,7 @@ def _plan_follow(
     after = centroids[contacts]
     turn = 0.0
     if track_hand_rotation and len(contacts) >= 2:
-        turn = _rotation(before, after)
+        turn = rotation_kernel(before, after)
     # Where last frame's points should be now: carried by their contact's centroid and
     # turned by the hand's turn (0 when that estimate is off).
     predicted = track_points[previous_rows]
@@ -459,6 +459,8 @@ def _plan_follow(
         chosen, chosen_bounds = gather(outlines, outline_bounds, contacts)
         starts = predicted[previous_bounds[:-1]]
         current, current_bounds = resample_kernel(chosen, chosen_bounds, spacing, starts)
+        if current_bounds[0] < 0:  # cannot happen: every outline encloses an area
+            raise ValueError("a contact outline has zero perimeter")
     else:
         current, current_bounds = gather(contours, contour_bounds, contacts)
     # The farthest any point of a contact moved: its centroid's step plus the turn's
@@ -489,28 +491,6 @@ def _rows(bounds: NDArray[np.intp], tracks: NDArray[np.intp]) -> NDArray[np.intp
             rows[n] = i
             n += 1
     return rows
-
-
-@njit
-def _rotation(before: NDArray[np.float64], after: NDArray[np.float64]) -> float:
-    """:func:`graspenv.proxies.base.rigid_rotation`, compiled."""
-    n = len(before)
-    bx, by, ax, ay = 0.0, 0.0, 0.0, 0.0
-    for i in range(n):
-        bx += before[i, 0]
-        by += before[i, 1]
-        ax += after[i, 0]
-        ay += after[i, 1]
-    bx, by, ax, ay = bx / n, by / n, ax / n, ay / n
-    cross, dot = 0.0, 0.0
-    for i in range(n):
-        px, py = before[i, 0] - bx, before[i, 1] - by
-        qx, qy = after[i, 0] - ax, after[i, 1] - ay
-        cross += px * qy - py * qx
-        dot += px * qx + py * qy
-    if cross == 0.0 and dot == 0.0:
-        return 0.0
-    return float(np.arctan2(cross, dot))
 
 
 @njit

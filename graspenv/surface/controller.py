@@ -109,13 +109,16 @@ class FingerController:
         for name in self.names:
             self.hand.add(name, Fingertip((0.0, 0.0), radii=(r, r)), touching=False)
         self._grip = GripState(np.zeros(2), 0.0, config.max_opening, False)
-        self._offsets = np.zeros((config.n_fingers, 2))  # of the grip, set with it
         self._finger_angles = 2.0 * math.pi * np.arange(config.n_fingers) / config.n_fingers
+        # The fingers' places about the grip centre, kept with the grip.
+        self._offsets = self._grip_offsets(self._grip)
 
     @property
     def grip(self) -> GripState:
-        """The grip the fingers sit on (move it with :meth:`place_grip` or actions)."""
-        return self._grip
+        """A copy of the grip the fingers sit on (move it with :meth:`place_grip` or
+        actions)."""
+        grip = self._grip
+        return GripState(grip.centre.copy(), grip.angle, grip.opening, grip.touching)
 
     @property
     def action_size(self) -> int:

@@ -166,7 +166,7 @@ class ContactShape(ABC):
         The same state as ``set_pose(centre, angle)`` then ``set_twist(velocity, 0.0)``,
         for callers that computed the values themselves (the finger controller, every
         frame): metres, radians and m/s, world frame, finite float arrays of shape
-        (2,), taken as they are.
+        (2,), neither checked nor copied (the shape keeps them: pass new arrays).
         """
         self._centre = centre
         self._angle = angle

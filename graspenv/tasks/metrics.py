@@ -552,6 +552,8 @@ def _convex_hull_normals(
             alive[:] = False
             alive[:kept] = True
             used = kept
+            if used + n_horizon > capacity:  # more facets than a hull can have
+                return none, _BROKEN
         # Keeping each horizon edge's direction keeps every facet's winding outward.
         for e in range(n_horizon):
             a, b = horizon[e, 0], horizon[e, 1]

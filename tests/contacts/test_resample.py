@@ -213,3 +213,18 @@ def test_batch_resampling_rejects_a_zero_perimeter_polyline() -> None:
     points, bounds = _laid_end_to_end([SQUARE, np.zeros((3, 2))])
     with pytest.raises(ValueError, match="zero perimeter"):
         resample_closed_batch(points, bounds, 0.25)
+
+
+def test_batch_functions_check_bounds_and_starts_before_the_kernels() -> None:
+    """The compiled kernels do not check indices: the public batch functions do."""
+    points = np.concatenate([SQUARE, SQUARE + 2.0])
+    good = np.array([0, 4, 8])
+    with pytest.raises(ValueError, match="rise strictly from 0 to 8"):
+        resample_closed_batch(points, np.array([0, 4, 12]), 0.25)
+    with pytest.raises(ValueError, match="rise strictly from 0 to 8"):
+        orient_ccw_batch(points, np.array([0, 4, 4, 8]))
+    with pytest.raises(ValueError, match="starts must have shape"):
+        resample_closed_batch(points, good, 0.25, np.zeros((1, 2)))
+    with pytest.raises(ValueError, match="points must be finite"):
+        resample_closed_batch(np.full((8, 2), np.nan), good, 0.25)
+    assert resample_closed_batch(points, good, 0.25)[1].tolist() == [0, 16, 32]

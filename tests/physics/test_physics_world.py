@@ -276,11 +276,12 @@ def test_pool_keeps_bullets_own_particle_states(world: PhysicsWorld) -> None:
     world.pool.place(ids, [[0.05, 0.0, 0.002], [0.06, 0.0, 0.002], [0.07, 0.0, 0.002]])
     position, velocity, known = world.pool.cached_states(ids)
     assert known.all()
-    np.testing.assert_array_equal(position, world.pool.positions(ids))
+    bodies = world.pool.body_ids(ids).tolist()
+    placed = [pb.getBasePositionAndOrientation(b, physicsClientId=world.client)[0] for b in bodies]
+    np.testing.assert_array_equal(position, np.array(placed))
     world.step_frame(ids, [[0.04, 0.0], [0.05, 0.001], [0.07, 0.0]])
     position, velocity, known = world.pool.cached_states(ids)
     assert known.all()
-    bodies = world.pool.body_ids(ids).tolist()
     bullet = [pb.getBasePositionAndOrientation(b, physicsClientId=world.client)[0] for b in bodies]
     np.testing.assert_array_equal(position, np.array(bullet))
     # Velocities are the last displacements over the sub-step: Bullet's to rounding.

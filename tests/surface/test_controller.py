@@ -62,3 +62,18 @@ def test_actions_are_clipped_and_bad_ones_refused() -> None:
         ctl.apply([0, 0])
     with pytest.raises(ValueError, match="action_mode"):
         FingerController(ControllerConfig(), SURFACE, "paws")  # type: ignore[arg-type]
+
+
+def test_a_new_controller_moves_its_fingers_from_their_grip() -> None:
+    """Before any place_grip, the fingers' twists follow the initial grip (no jump)."""
+    from graspenv.surface.controller import ControllerConfig, FingerController
+    from graspenv.surface.geometry import Surface
+
+    controller = FingerController(ControllerConfig(), Surface(), "grip")
+    controller.apply(np.array([0.5, 0.0, 0.0, 0.0, 1.0]))
+    speeds = [np.hypot(*v) for v in controller.finger_velocities()]
+    np.testing.assert_allclose(speeds, 0.5 * ControllerConfig().max_speed, rtol=1e-9)
+    grip = controller.grip
+    before = float(grip.centre[0])
+    grip.centre[0] = 1.0  # a copy: the controller's grip is unchanged
+    assert controller.grip.centre[0] == before

@@ -202,13 +202,14 @@ class Simulation:
 
     # -- disturbances and initial states -----------------------------------------------
 
-    def apply_force(self, name: str, force: ArrayLike) -> None:
-        """Push an object at its centre with ``force`` (N, world frame, (3,)) for the
-        next :meth:`step` only (every physics sub-step of that camera frame).
+    def apply_force(self, name: str, force: ArrayLike, height: float | None = None) -> None:
+        """Push an object with ``force`` (N, world frame, (3,)) for the next
+        :meth:`step` only (every physics sub-step of that camera frame), at its centre
+        of mass or along a line through ``height`` metres above the table.
 
         See :meth:`graspenv.physics.world.PhysicsWorld.apply_force`.
         """
-        self._world.apply_force(name, force)
+        self._world.apply_force(name, force, height)
 
     def set_object_state(
         self,

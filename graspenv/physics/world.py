@@ -245,6 +245,7 @@ class PhysicsWorld:
         self.rigid_proxies = RigidBodies(self.client, scene.proxy, scene.physics)
         # Force on each object (by index) for every sub-step of the next frame, N.
         self._pending_force: dict[int, NDArray[np.float64]] = {}
+        self._pending_torque: dict[int, NDArray[np.float64]] = {}
         self._states: ObjectStates | None = None
         self._states_step = -1
         self._place_objects()
@@ -301,7 +302,7 @@ class PhysicsWorld:
         object state itself is restored). Where bit-identity must be guaranteed,
         use :meth:`rebuild`, which empties Bullet and builds the scene anew.
         """
-        self._pending_force = {}
+        self._pending_force, self._pending_torque = {}, {}
         self.pool.release_all()
         self.rigid_proxies.clear()
         self._place_objects()
@@ -418,8 +419,9 @@ class PhysicsWorld:
             self._states_step = step
         return self._states
 
-    def apply_force(self, name: str, force: ArrayLike) -> None:
-        """Push an object at its centre of mass throughout the next camera frame.
+    def apply_force(self, name: str, force: ArrayLike, height: float | None = None) -> None:
+        """Push an object throughout the next camera frame, at its centre of mass or
+        at a height.
 
         The force acts on every physics sub-step of the next :meth:`step_frame` or
         :meth:`step_bodies` call, i.e. for one camera frame (``frame_dt`` seconds),
@@ -432,10 +434,16 @@ class PhysicsWorld:
         Args:
             name: object name.
             force: newtons, world frame, shape (3,).
+            height: the push's line of action passes through the point this far above
+                the table (metres) over the object's centre: the force at the centre
+                of mass plus the torque of that offset, taken at the object's pose now.
+                ``None`` pushes at the centre of mass (no torque). A push at the height
+                of the fingers' contacts cannot tip a squeezed object over them.
 
         Raises:
             KeyError: no object has that name.
-            ValueError: the force is not three finite numbers.
+            ValueError: the force is not three finite numbers, or the height is not
+                finite.
         """
         index = self.object_index(name)
         push = np.asarray(force, dtype=float)
@@ -443,6 +451,14 @@ class PhysicsWorld:
             raise ValueError(f"force for {name!r} must be 3 finite numbers (N), got {force!r}")
         pending = self._pending_force.get(index)
         self._pending_force[index] = push.copy() if pending is None else pending + push
+        if height is None:
+            return
+        if not math.isfinite(height):
+            raise ValueError(f"height for {name!r} must be finite (metres), got {height!r}")
+        arm = np.array([0.0, 0.0, float(height) - self.object_states().position[index, 2]])
+        torque = np.cross(arm, push)
+        twist = self._pending_torque.get(index)
+        self._pending_torque[index] = torque if twist is None else twist + torque
 
     def set_object_state(
         self,
@@ -862,7 +878,7 @@ class PhysicsWorld:
             self.pool.physics_steps += 1
             if observe is not None:
                 observe()
-        self._pending_force = {}
+        self._pending_force, self._pending_torque = {}, {}
         if h != self.substep_dt:
             pb.setTimeStep(self.substep_dt, physicsClientId=client)
         self.bullet_seconds = bullet
@@ -926,6 +942,14 @@ class PhysicsWorld:
                 -1,
                 self._pending_force[index].tolist(),
                 position,
+                pb.WORLD_FRAME,
+                physicsClientId=client,
+            )
+        for index in sorted(self._pending_torque):
+            pb.applyExternalTorque(
+                self._object_bodies[index],
+                -1,
+                self._pending_torque[index].tolist(),
                 pb.WORLD_FRAME,
                 physicsClientId=client,
             )

@@ -34,7 +34,9 @@ def test_slip_force_matches_coulomb(base: SceneConfig) -> None:
     """A squeezed box slips when the side force reaches μ·N (fingers + table)."""
     errors = slip(base).errors
     assert errors["grip_normal_n"] > 1.0  # the box is really squeezed
-    assert abs(errors["slip_error_pct"]) < 15.0, errors
+    assert abs(errors["slip_error_pct"]) < 5.0, errors
+    # Before it slides the box creeps, as the least loaded particles give first.
+    assert errors["creep_force_n"] <= errors["slip_force_n"]
     assert errors["tilt_at_slip_deg"] < 1.0  # it slid, it did not tip
 
 

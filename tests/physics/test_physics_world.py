@@ -289,3 +289,19 @@ def test_pool_keeps_bullets_own_particle_states(world: PhysicsWorld) -> None:
     np.testing.assert_allclose(velocity, np.array(moving), rtol=0, atol=1e-9)
     world.step_frame(np.zeros(0, np.int64), np.zeros((0, 2)))  # a step without them
     assert not world.pool.cached_states(ids)[2].any()
+
+
+def test_a_push_at_a_height_adds_the_torque_of_its_offset(world: PhysicsWorld) -> None:
+    """apply_force(height=h) is the force at the centre of mass plus (h - z_c) ẑ × F."""
+    world.set_object_state("box", (0.0, 0.0, 0.1))  # in the air: no table contact
+    centre = world.object_pose("box")[0][2]
+    world.apply_force("box", (0.0, 2.0, 0.0), height=centre - 0.01)
+    world.step_frame(np.zeros(0, np.int64), np.zeros((0, 2)))
+    linear, angular = world.object_velocity("box")
+    size, mass = np.array(world.scene.objects[0].size), world.scene.objects[0].mass
+    inertia_x = mass * (size[1] ** 2 + size[2] ** 2) / 12
+    # Torque (0, 0, -0.01) × (0, 2, 0) = (0.02, 0, 0) N·m for one frame.
+    np.testing.assert_allclose(angular[0], 0.02 / inertia_x / 60.0, rtol=1e-6)
+    np.testing.assert_allclose(linear[1], 2.0 / mass / 60.0, rtol=1e-6)
+    with pytest.raises(ValueError, match="height"):
+        world.apply_force("box", (1.0, 0.0, 0.0), height=float("nan"))

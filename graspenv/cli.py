@@ -176,6 +176,19 @@ def _bench(args: argparse.Namespace) -> int:
         for path in report.write(Path(args.out)):
             print(f"wrote {path}")
         return 0
+    if args.grid:
+        from graspenv.bench import grid
+
+        if args.workers < 1:
+            raise ValueError(f"--workers must be at least 1, got {args.workers}")
+        if args.from_csv is not None:
+            cells = grid.read_csv(Path(args.from_csv))
+        else:
+            cells = grid.run_grid(config=args.config, progress=_say, workers=args.workers)
+        print(grid.summary(cells))
+        for path in grid.write_outputs(cells, Path(args.out)):
+            print(f"wrote {path}")
+        return 0
     if args.soak is not None:
         from graspenv.bench.soak import soak
 
@@ -237,6 +250,15 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
         action="store_true",
         help="instead: whole-run speeds, environment steps/s beside panda-gym, resets, "
         "frame cost against contacts and compile times (speed.md, speed.csv, scaling.png)",
+    )
+    p.add_argument(
+        "--grid",
+        action="store_true",
+        help="instead: accuracy across the grasp space, 91 grasps (grid.csv, grid.md, "
+        "grid_*.png heat maps); with --from-csv, draw them again from a grid.csv",
+    )
+    p.add_argument(
+        "--workers", type=int, default=2, help="--grid: processes measuring cells at once"
     )
     p.add_argument("--runs", type=int, default=3, help="--speed: whole runs of each scene")
     p.add_argument(

@@ -52,6 +52,7 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
+import pybullet as pb
 from numpy.typing import NDArray
 
 from graspenv.bench.interactions import BOX, CLEARANCE, FINGER_RADIUS, pinch, with_objects
@@ -280,22 +281,73 @@ FLAT_BOX = ObjectConfig(name="box", shape="box", size=(0.06, 0.06, 0.008), mass=
 
 def slip(base: SceneConfig, offset: Offset = (0.0, 0.0), replays: int = 1) -> Played:
     """Squeeze a flat box lightly, settle, then push it along +y (across the grip)
-    with a growing force until it slips: slides at :data:`SLIP_SPEED` relative to the
-    particles gripping it (they give elastically with the box before, and creep).
+    with a force growing by :data:`SLIP_RATE` N/s until it slips (:func:`push_until_slip`).
     Timed once: the push acts from inside the run (``replays`` is not used)."""
     del replays
+    return push_until_slip(base, _shifted(FLAT_BOX, offset), 0.001)
+
+
+def push_until_slip(
+    base: SceneConfig,
+    obj: ObjectConfig,
+    depth: float,
+    *,
+    rate: float = SLIP_RATE,
+    relative_rate: float | None = None,
+    ramp_frames: int = SLIP_FRAMES,
+    height: float | None = None,
+    finger_radius: float = FINGER_RADIUS,
+) -> Played:
+    """Squeeze ``obj`` (its name must be "box") ``depth`` deep, settle 20 frames, then
+    push it along +y (across the grip) with a growing force until it slips: slides at
+    :data:`SLIP_SPEED` relative to the particles gripping it (they give elastically
+    with it before, and creep).
+
+    Args:
+        base: the scene whose settings are under test.
+        obj: the gripped object.
+        depth: how far each fingertip presses into it, metres.
+        rate: the push's growth, N/s.
+        relative_rate: instead, its growth as a share of Coulomb's prediction (from
+            the normal forces measured while settling) a second.
+        ramp_frames: frames of the ramp before it gives up (the figure is then NaN).
+        height: the push's line of action passes this far above the table (metres);
+            ``None``: through the centre of mass.
+        finger_radius: fingertip radius, metres.
+
+    Returns:
+        The run, with errors ``slip_force_n``, ``coulomb_force_n``,
+        ``slip_error_pct``, ``creep_force_n``, ``grip_normal_n`` and
+        ``tilt_at_slip_deg``.
+    """
     settle = 20
-    box = _shifted(FLAT_BOX, offset)
-    script = pinch(box, 0.001, turn_frames=0, slide_frames=0, hold_frames=settle + SLIP_FRAMES)
-    scene = with_objects(base, box)
+    script = pinch(
+        obj,
+        depth,
+        finger_radius=finger_radius,
+        turn_frames=0,
+        slide_frames=0,
+        hold_frames=settle + ramp_frames,
+    )
+    scene = with_objects(base, obj)
     hold_start = sum(
         len(frames) for name, frames in script.phase_ranges() if name in ("touch", "squeeze")
     )
     ramp_start = hold_start + settle
     dt = 1.0 / scene.surface.fps
+    # Bullet's combined friction is the product of the two bodies' coefficients.
+    finger_mu = base.proxy.particle_friction * obj.friction
+    table_mu = base.physics.table_friction * obj.friction
+
+    def predicted() -> float:
+        # Mean normal forces (newtons, the last sub-step of each frame) while settled;
+        # each finger presses with about half the total normal force.
+        normal, table = float(np.mean(state["normal"])), float(np.mean(state["table"]))
+        return coulomb_slip_force(normal / 2, finger_mu) + table_mu * table
+
     state: dict[str, Any] = {
         "normal": [], "table": [], "start": None, "force": math.nan, "creep": math.nan,
-        "moved": 0.0,
+        "moved": 0.0, "rate": rate,
     }  # fmt: skip
 
     def each(sim: Simulation, index: int, played: Played) -> bool:
@@ -306,20 +358,25 @@ def slip(base: SceneConfig, offset: Offset = (0.0, 0.0), replays: int = 1) -> Pl
             state["normal"].append(float(report.normal_force[fingers].sum()))
             state["table"].append(float(report.normal_force[table].sum()))
         if index + 1 >= ramp_start:
-            position, _ = sim.object_pose("box")
+            position, q = sim.object_pose("box")
+            rotation = np.asarray(pb.getMatrixFromQuaternion(q)).reshape(3, 3)
             if state["start"] is None:
                 report = sim.contact_report("box")
                 ids = np.unique(report.particle[report.particle >= 0])
                 if ids.size == 0:  # no particle grips it (rigid proxies): no figure
                     return True
                 state["ids"] = ids
-                state["start"] = position[:2].copy()
-                state["grip_start"] = sim.world.pool.positions(ids)[:, :2].mean(axis=0)
-            force = SLIP_RATE * (index + 1 - ramp_start) * dt
-            grip = sim.world.pool.positions(state["ids"])[:, :2].mean(axis=0)
-            moved = float(
-                np.linalg.norm((position[:2] - state["start"]) - (grip - state["grip_start"]))
-            )
+                state["start"] = True
+                grip = sim.world.pool.positions(ids).mean(axis=0)
+                # The box's own point at the grip: a tall box rocks about the grip's
+                # line, which moves its centre but slides nothing.
+                state["local"] = rotation.T @ (grip - position)
+                if relative_rate is not None:
+                    state["rate"] = relative_rate * predicted()
+            force = state["rate"] * (index + 1 - ramp_start) * dt
+            grip = sim.world.pool.positions(state["ids"]).mean(axis=0)
+            point = position + rotation @ state["local"]
+            moved = float(np.linalg.norm((point - grip)[:2]))
             if moved > CREEP_DISTANCE and math.isnan(state["creep"]):
                 state["creep"] = force
             speed, state["moved"] = (moved - state["moved"]) / dt, moved
@@ -327,23 +384,17 @@ def slip(base: SceneConfig, offset: Offset = (0.0, 0.0), replays: int = 1) -> Pl
                 state["force"] = force
                 state["tilt"] = math.degrees(tilt_angle(sim.object_pose("box")[1]))
                 return True
-            sim.apply_force("box", (0.0, SLIP_RATE * (index + 2 - ramp_start) * dt, 0.0))
+            push = state["rate"] * (index + 2 - ramp_start) * dt
+            sim.apply_force("box", (0.0, push, 0.0), height)
         return False
 
     played = play(scene, script, ["box"], (), each_frame=each)
-    # Bullet's combined friction is the product of the two bodies' coefficients.
-    finger_mu = base.proxy.particle_friction * BOX.friction
-    table_mu = base.physics.table_friction * BOX.friction
-    # Mean normal forces (newtons, from the last sub-step of each frame) over the hold.
-    normal = float(np.mean(state["normal"]))
-    table = float(np.mean(state["table"]))
-    # Each finger presses with about half the total normal force.
-    predicted = coulomb_slip_force(normal / 2, finger_mu) + table_mu * table
-    played.errors["grip_normal_n"] = normal
+    coulomb = predicted()
+    played.errors["grip_normal_n"] = float(np.mean(state["normal"]))
     played.errors["tilt_at_slip_deg"] = state.get("tilt", math.nan)
     played.errors["slip_force_n"] = state["force"]
-    played.errors["coulomb_force_n"] = predicted
-    played.errors["slip_error_pct"] = 100 * (state["force"] - predicted) / predicted
+    played.errors["coulomb_force_n"] = coulomb
+    played.errors["slip_error_pct"] = 100 * (state["force"] - coulomb) / coulomb
     played.errors["creep_force_n"] = state["creep"]
     return played
 

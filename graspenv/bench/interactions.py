@@ -139,13 +139,16 @@ def _angle_between(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
     return math.atan2(float(a[0] * b[1] - a[1] * b[0]), float(a @ b))
 
 
-def pinch(obj: ObjectConfig, depth: float, **kwargs: Any) -> Script:
-    """Two fingertips either side of ``obj`` along x, pushing ``depth`` into it."""
+def pinch(
+    obj: ObjectConfig, depth: float, finger_radius: float = FINGER_RADIUS, **kwargs: Any
+) -> Script:
+    """Two fingertips (``finger_radius`` metres) either side of ``obj`` along x,
+    pushing ``depth`` into it; ``kwargs`` go to :func:`two_finger_pinch`."""
     width = obj.size[0] if obj.shape == "box" else 2.0 * obj.size[0]
     return two_finger_pinch(
         centre=obj.position,
         gap=width + 2 * CLEARANCE,
-        finger_radius=FINGER_RADIUS,
+        finger_radius=finger_radius,
         approach=CLEARANCE + depth,
         **kwargs,
     )

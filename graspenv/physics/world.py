@@ -63,6 +63,15 @@ TABLE_THICKNESS = 0.05
 FLOOR_DEPTH = 0.75
 _FLOOR_HALF_SIZE = 2.0
 _RAY_BATCH = 8192
+#: A bottom particle rests on a surface that its rays meet at least this many radii
+#: below its centre. A ray from 0.9 radius out of a particle pressed into an object's
+#: side can start inside the object (a convex hull), and Bullet reports a hit at its
+#: very start; counting that as a support raised the particle's resting height with
+#: it, so nothing pulled it down and the squeeze walked it up the side (README,
+#: "Accuracy across the grasp space": the slide's box tipped 9° and lost its grip).
+#: A particle on a top face's edge meets the face 0.44 radius below its centre or
+#: lower.
+SUPPORT_CLEARANCE = 0.1
 # Rays start this far above the highest point any object could reach while resting.
 _RAY_CLEARANCE = 0.5
 
@@ -821,7 +830,9 @@ class PhysicsWorld:
         rest_z = np.full(bottom_z.shape, self.pool.radius)
         raised = bottom_z > self.pool.radius + REST_TOLERANCE
         if np.any(raised):
-            rest_z[raised] += self._support_heights(x[drive.is_bottom][raised])
+            rest_z[raised] += self._support_heights(
+                x[drive.is_bottom][raised], clearance=SUPPORT_CLEARANCE * self.pool.radius
+            )
 
         def drive_particles(substep: int) -> None:
             velocity = drive.velocities(substep, x, v, rest_z)
@@ -901,12 +912,16 @@ class PhysicsWorld:
         top = self._ray_top()
         return self._support_heights(np.column_stack([points, np.full(len(points), top)]))
 
-    def _support_heights(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+    def _support_heights(
+        self, points: NDArray[np.float64], clearance: float = 0.0
+    ) -> NDArray[np.float64]:
         """Height of the highest surface below each particle's disc (0: table), (n,).
 
         Rays go down from the centre and from four points 0.9 radius around it, so
         a particle whose centre has just passed an edge still counts as resting on
         it (pulling it down there would drive it into the edge and kick the object).
+        A surface met less than ``clearance`` below a ray's start is not a support
+        (:data:`SUPPORT_CLEARANCE`).
         """
         n = points.shape[0]
         if n == 0:
@@ -923,7 +938,7 @@ class PhysicsWorld:
                 physicsClientId=self.client,
             )
             for i, hit in enumerate(hits, start=lo):
-                if hit[0] >= 0 and hit[0] != self._table:
+                if hit[0] >= 0 and hit[0] != self._table and hit[3][2] <= starts[i, 2] - clearance:
                     height[i] = hit[3][2]
         return height.reshape(n, -1).max(axis=1)
 

@@ -22,19 +22,21 @@ from . import _cases as cases
 from ._cases import Case
 
 GUARDS = [
-    # Without CCD a particle following a 1 m/s finger passes through the box's side
-    # and, lifted onto the top, through the top and the table.
+    # Without CCD a particle following a 1 m/s finger passes into the box's side and,
+    # pulled down there (a surface met at a ray's start is no support), through the
+    # table: 11.7 mm below it (it was lifted onto the box's top and through it while
+    # such a hit counted as a support).
     pytest.param(
         lambda: cases.strike(1.0),
         {"physics": {"ccd": False}},
-        {"below_table", "inside_object"},
+        {"below_table"},
         id="physics.ccd",
     ),
     # CCD at Bullet's own allowed penetration (4 cm) is no better than none.
     pytest.param(
         lambda: cases.strike(1.0),
         {"physics": {"allowed_ccd_penetration": 0.04}},
-        {"below_table", "inside_object"},
+        {"below_table"},
         id="physics.allowed_ccd_penetration",
     ),
     # A 20 mm squeeze held on the sides instead of the top springs the box away

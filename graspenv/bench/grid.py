@@ -1,0 +1,529 @@
+"""``graspenv bench --grid``: accuracy across the grasp space.
+
+The canonical scene is one grasp. The grid plays the same two-finger grasp over the
+space around it, each map sweeping two of its parameters with the rest at the
+canonical values (:data:`BASE_CELL`):
+
+- boxes and upright cylinders, footprint (side or diameter) 3–12 cm against mass
+  5 g–2 kg;
+- box height 1–8 cm against squeeze depth 1–6 mm;
+- object friction 0.3–1 against fingertip radius 5–12 mm.
+
+Every cell sits at its own place on the table and its own sub-pixel phase (seeded),
+so no cell shares the canonical scene's pixel grid. Each cell plays three runs
+through the whole pipeline and measures them against ground truth, the ideal rigid
+grasp:
+
+- ``turn``: squeeze and turn the pair 90° in 1.5 s. Error: the object's yaw against
+  the fingers' 90°, degrees.
+- ``slide``: squeeze and slide the pair 10 cm across the grip. Error: the distance
+  between where the object ends and where the rigid grasp takes it (lateral drift
+  included), as a share of the travel, %.
+- ``slip``: squeeze and hold, then push across the grip along the contacts' line
+  (so it cannot tip the object over them), the push growing by Coulomb's prediction
+  a second, until it slips (:func:`graspenv.bench.frontier.push_until_slip`). Error:
+  the push at slip against ``μ_f·ΣN_fingers + μ_t·N_table``, %.
+
+**Margins.** Whether a rigid pair of fingertips could hold the grasp at all is
+Coulomb's law on the normal force the grip actually exerts (measured, mean over the
+motion): with μ_f and μ_t Bullet's finger–object and table–object coefficients (the
+products of the two bodies'), N the fingers' total normal force, m g the weight, w
+the distance between the two contacts and r_eff the mean distance of the footprint
+from its centre (0.383 × side for a square, 2/3 radius for a disc, uniform
+pressure),
+
+- slide margin = μ_f N / (μ_t m g): the grip's friction over the table's;
+- turn margin = μ_f N w / (2 μ_t m g r_eff): the grip's couple over the table's
+  torque.
+
+A cell is counted against the targets (turn ≤ :data:`TURN_TARGET_DEG`, slide ≤
+:data:`SLIDE_TARGET_PCT`) only where its margin is at least :data:`MARGIN`. Two,
+because the uniform-pressure torque is a best case: a squeezed object rocks onto
+one edge, and with all its weight at the corners a square's r_eff is 0.707 × side,
+1.85 × the uniform figure; and the normal force varies by ±15 % over a motion.
+Cells below the margin are drawn hatched and listed, not counted.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from graspenv.bench.frontier import Played, play, push_until_slip
+from graspenv.bench.interactions import FINGER_RADIUS, pinch, with_objects
+from graspenv.config import ObjectConfig, SceneConfig, load_config
+from graspenv.geometry import tilt_angle, yaw_of
+from graspenv.plots import FONT, INK, MUTED, write_png
+from graspenv.simulation import Simulation
+
+__all__ = [
+    "BASE_CELL",
+    "MAPS",
+    "Cell",
+    "CellResult",
+    "GridMap",
+    "heat_map_png",
+    "measure_cell",
+    "run_grid",
+]
+
+TURN_TARGET_DEG = 1.0
+SLIDE_TARGET_PCT = 2.0
+SLIP_TARGET_PCT = 5.0
+#: The slip run's push grows by this share of Coulomb's prediction a second (a
+#: faster ramp, 1 a second, let a flat box slip 25 % early; at 0.3 it is within 1 %).
+SLIP_RAMP = 0.3
+MARGIN = 2.0
+GRAVITY = 9.81
+TURN = math.pi / 2
+SLIDE = 0.10  # metres, along +y (across the grip)
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One grasp of the grid (SI units)."""
+
+    shape: str = "box"  # "box" or "cylinder" (upright)
+    footprint: float = 0.06  # side of the square or diameter of the disc, metres
+    height: float = 0.03
+    mass: float = 0.2
+    friction: float = 0.5  # the object's; Bullet multiplies it by the other body's
+    depth: float = 0.003  # how far each fingertip presses into the object
+    finger_radius: float = FINGER_RADIUS
+    position: tuple[float, float] = (0.0, 0.0)  # on the table, metres
+
+    def object(self) -> ObjectConfig:
+        size = (
+            (self.footprint, self.footprint, self.height)
+            if self.shape == "box"
+            else (self.footprint / 2, self.height)
+        )
+        return ObjectConfig(
+            name="box",
+            shape=self.shape,  # type: ignore[arg-type]
+            size=size,
+            mass=self.mass,
+            friction=self.friction,
+            position=self.position,
+        )
+
+    @property
+    def mean_radius(self) -> float:
+        """Mean distance of the footprint from its centre, metres (uniform pressure)."""
+        if self.shape == "box":
+            # (1/3)(√2 + ln(1 + √2)) / 2 × side, the mean distance in a unit square.
+            return 0.3826 * self.footprint
+        return self.footprint / 3.0
+
+
+BASE_CELL = Cell()
+
+
+@dataclass(frozen=True)
+class GridMap:
+    """Two parameters of :class:`Cell` swept against each other, the rest at ``base``."""
+
+    name: str
+    title: str
+    x: str
+    x_values: tuple[float, ...]
+    y: str
+    y_values: tuple[float, ...]
+    base: Cell = BASE_CELL
+
+    def cells(self) -> list[Cell]:
+        swept: list[dict[str, Any]] = [
+            {self.x: xv, self.y: yv} for yv in self.y_values for xv in self.x_values
+        ]
+        return [replace(self.base, **values) for values in swept]
+
+
+_FOOTPRINTS = (0.03, 0.045, 0.06, 0.09, 0.12)
+_MASSES = (0.005, 0.02, 0.1, 0.5, 2.0)
+MAPS: tuple[GridMap, ...] = (
+    GridMap("boxes", "boxes: footprint x mass", "footprint", _FOOTPRINTS, "mass", _MASSES),
+    GridMap(
+        "cylinders",
+        "upright cylinders: diameter x mass",
+        "footprint",
+        _FOOTPRINTS,
+        "mass",
+        _MASSES,
+        replace(BASE_CELL, shape="cylinder"),
+    ),
+    GridMap(
+        "height",
+        "boxes: height x squeeze depth",
+        "height",
+        (0.01, 0.02, 0.04, 0.06, 0.08),
+        "depth",
+        (0.001, 0.002, 0.003, 0.0045, 0.006),
+    ),
+    GridMap(
+        "friction",
+        "boxes: friction x fingertip radius",
+        "friction",
+        (0.3, 0.5, 0.7, 1.0),
+        "finger_radius",
+        (0.005, 0.007, 0.009, 0.012),
+    ),
+)
+#: A few cells that cover the failure modes once seen (small, light, tall, a
+#: cylinder), for the test suite.
+QUICK_CELLS: tuple[Cell, ...] = (
+    replace(BASE_CELL, footprint=0.04),
+    replace(BASE_CELL, mass=0.02),
+    replace(BASE_CELL, height=0.08, depth=0.0045),
+    replace(BASE_CELL, shape="cylinder", footprint=0.045, mass=0.5),
+)
+
+
+def placed(cells: Sequence[Cell], seed: int = 0) -> list[Cell]:
+    """The cells, each moved to its own seeded place on the table: anywhere the
+    slide stays on it, at a continuous (so sub-pixel) offset."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for cell in cells:
+        x = float(rng.uniform(-0.12, 0.12))
+        y = float(rng.uniform(-0.12, 0.0))
+        out.append(replace(cell, position=(x, y)))
+    return out
+
+
+@dataclass
+class CellResult:
+    """What one cell measured (NaN where a run gave no figure)."""
+
+    cell: Cell
+    map: str = ""
+    grip_normal_n: float = math.nan
+    turn_error_deg: float = math.nan
+    slide_error_pct: float = math.nan
+    slip_error_pct: float = math.nan
+    turn_margin: float = math.nan
+    slide_margin: float = math.nan
+    max_tilt_deg: float = math.nan
+
+    @property
+    def turn_counted(self) -> bool:
+        return self.turn_margin >= MARGIN
+
+    @property
+    def slide_counted(self) -> bool:
+        return self.slide_margin >= MARGIN
+
+    @property
+    def turn_ok(self) -> bool:
+        return abs(self.turn_error_deg) <= TURN_TARGET_DEG
+
+    @property
+    def slide_ok(self) -> bool:
+        return abs(self.slide_error_pct) <= SLIDE_TARGET_PCT
+
+    def row(self) -> dict[str, Any]:
+        row: dict[str, Any] = {"map": self.map}
+        cell = asdict(self.cell)
+        cell["x"], cell["y"] = cell.pop("position")
+        row.update(cell)
+        for f in fields(self):
+            if f.name not in ("cell", "map"):
+                row[f.name] = getattr(self, f.name)
+        row["turn_counted"] = self.turn_counted
+        row["slide_counted"] = self.slide_counted
+        return row
+
+
+def _coefficients(base: SceneConfig, cell: Cell) -> tuple[float, float]:
+    """Bullet's finger-object and table-object friction (products of the bodies')."""
+    return base.proxy.particle_friction * cell.friction, base.physics.table_friction * cell.friction
+
+
+def _grasp_run(base: SceneConfig, cell: Cell, motion: str) -> tuple[Played, float, float]:
+    """Squeeze and turn (or slide) the pair; the run, the mean finger normal force
+    over the motion (N) and the largest tilt (degrees)."""
+    obj = cell.object()
+    if motion == "turn":
+        kwargs: dict[str, Any] = {"turn": TURN, "turn_frames": 90, "slide_frames": 0}
+    else:
+        kwargs = {"slide": (0.0, SLIDE), "turn_frames": 0, "slide_frames": 90}
+    script = pinch(obj, cell.depth, cell.finger_radius, hold_frames=15, **kwargs)
+    moving = {i for name, frames in script.phase_ranges() if name == motion for i in frames}
+    normal: list[float] = []
+    state = {"yaw": 0.0, "last": obj.yaw, "tilt": 0.0}
+
+    def each(sim: Simulation, index: int, played: Played) -> bool:
+        _, q = sim.object_pose("box")
+        now = yaw_of(q)
+        state["yaw"] += math.remainder(now - state["last"], 2 * math.pi)
+        state["last"] = now
+        state["tilt"] = max(state["tilt"], math.degrees(tilt_angle(q)))
+        if index in moving:
+            report = sim.contact_report("box")
+            normal.append(float(report.normal_force[report.particle >= 0].sum()))
+        return False
+
+    played = play(with_objects(base, obj), script, ["box"], (), each_frame=each)
+    played.errors["turned"] = state["yaw"]
+    return played, float(np.mean(normal)) if normal else 0.0, state["tilt"]
+
+
+def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = "") -> CellResult:
+    """Play a cell's turn, slide and slip runs and measure them (module docstring)."""
+    base = load_config(None) if base is None else base
+    mu_f, mu_t = _coefficients(base, cell)
+    weight = cell.mass * GRAVITY
+    result = CellResult(cell, map_name)
+
+    turned, turn_normal, turn_tilt = _grasp_run(base, cell, "turn")
+    result.turn_error_deg = math.degrees(turned.errors["turned"] - TURN)
+    # The contacts are the fingertips' on the two faces: the footprint apart.
+    result.turn_margin = (
+        mu_f * turn_normal * cell.footprint / (2.0 * mu_t * weight * cell.mean_radius)
+    )
+
+    slid, slide_normal, slide_tilt = _grasp_run(base, cell, "slide")
+    x, y = slid.final["box"][:2]
+    ideal = (cell.position[0], cell.position[1] + SLIDE)
+    result.slide_error_pct = 100.0 * math.hypot(x - ideal[0], y - ideal[1]) / SLIDE
+    result.slide_margin = mu_f * slide_normal / (mu_t * weight)
+    result.grip_normal_n = 0.5 * (turn_normal + slide_normal)
+    result.max_tilt_deg = max(turn_tilt, slide_tilt)
+
+    # Pushed along the contacts' line: the particles' centres are a radius up.
+    slipped = push_until_slip(
+        base,
+        cell.object(),
+        cell.depth,
+        relative_rate=SLIP_RAMP,
+        ramp_frames=round(2.0 / SLIP_RAMP * base.surface.fps),
+        height=base.proxy.particle_radius,
+        finger_radius=cell.finger_radius,
+    )
+    result.slip_error_pct = slipped.errors["slip_error_pct"]
+    return result
+
+
+def _measure(job: tuple[Cell, str, str | None]) -> CellResult:
+    cell, map_name, config = job
+    return measure_cell(cell, load_config(config), map_name)
+
+
+def grid_jobs(maps: Sequence[GridMap], seed: int = 0) -> list[tuple[Cell, str]]:
+    """Every map's cells, placed (:func:`placed`), with their map's name."""
+    jobs = []
+    for index, grid_map in enumerate(maps):
+        for cell in placed(grid_map.cells(), seed + index):
+            jobs.append((cell, grid_map.name))
+    return jobs
+
+
+def run_grid(
+    maps: Sequence[GridMap] = MAPS,
+    config: str | None = None,
+    progress: Callable[[str], None] | None = None,
+    workers: int = 1,
+    seed: int = 0,
+) -> list[CellResult]:
+    """Measure every cell of ``maps`` (in ``workers`` processes)."""
+    jobs = [(cell, name, config) for cell, name in grid_jobs(maps, seed)]
+    results: list[CellResult] = []
+
+    def note(result: CellResult) -> None:
+        results.append(result)
+        if progress is not None:
+            c = result.cell
+            progress(
+                f"[{len(results)}/{len(jobs)}] {result.map}: {c.shape} {100 * c.footprint:g} cm"
+                f" x {100 * c.height:g} cm, {1000 * c.mass:g} g, mu {c.friction:g},"
+                f" depth {1000 * c.depth:g} mm, finger {1000 * c.finger_radius:g} mm:"
+                f" turn {result.turn_error_deg:+.2f} deg, slide {result.slide_error_pct:.2f} %,"
+                f" slip {result.slip_error_pct:+.1f} %, margins {result.turn_margin:.1f}"
+                f"/{result.slide_margin:.1f}"
+            )
+
+    if workers <= 1:
+        for job in jobs:
+            note(_measure(job))
+    else:
+        with ProcessPoolExecutor(workers) as pool:
+            for result in pool.map(_measure, jobs):
+                note(result)
+    return results
+
+
+# -- outputs --------------------------------------------------------------------------
+
+
+def write_csv(results: Sequence[CellResult], path: Path) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    rows = [r.row() for r in results]
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return path
+
+
+def read_csv(path: Path) -> list[CellResult]:
+    """Results written by :func:`write_csv`."""
+    cell_names = {f.name for f in fields(Cell)} - {"position"}
+    numbers = {f.name for f in fields(CellResult)} - {"cell", "map"}
+    out = []
+    with path.open() as f:
+        for row in csv.DictReader(f):
+            kwargs: dict[str, Any] = {k: float(row[k]) for k in cell_names if k != "shape"}
+            cell = Cell(shape=row["shape"], position=(float(row["x"]), float(row["y"])), **kwargs)
+            out.append(CellResult(cell, row["map"], **{k: float(row[k]) for k in numbers}))
+    return out
+
+
+def summary(results: Sequence[CellResult]) -> str:
+    """Markdown: per map, the counted cells meeting each target, the worst counted
+    errors, and the cells not counted."""
+    lines = [
+        "| map | turn ≤ 1° (counted) | worst turn | slide ≤ 2 % (counted) | worst slide"
+        " | slip within 5 % | worst slip | not counted |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    groups: dict[str, list[CellResult]] = {}
+    for r in results:
+        groups.setdefault(r.map, []).append(r)
+    groups["all"] = list(results)
+    for name, rows in groups.items():
+        turns = [r for r in rows if r.turn_counted]
+        slides = [r for r in rows if r.slide_counted]
+        slips = [r for r in rows if math.isfinite(r.slip_error_pct)]
+        worst_turn = max((abs(r.turn_error_deg) for r in turns), default=math.nan)
+        worst_slide = max((abs(r.slide_error_pct) for r in slides), default=math.nan)
+        worst_slip = max((abs(r.slip_error_pct) for r in slips), default=math.nan)
+        uncounted = sum(1 for r in rows if not (r.turn_counted and r.slide_counted))
+        lines.append(
+            f"| {name} | {sum(r.turn_ok for r in turns)}/{len(turns)} | {worst_turn:.2f}°"
+            f" | {sum(r.slide_ok for r in slides)}/{len(slides)} | {worst_slide:.2f} %"
+            f" | {sum(abs(r.slip_error_pct) <= SLIP_TARGET_PCT for r in slips)}/{len(rows)}"
+            f" | {worst_slip:.1f} % | {uncounted} |"
+        )
+    return "\n".join(lines)
+
+
+def _fmt(name: str, value: float) -> str:
+    if name == "mass":
+        return f"{1000 * value:g} g"
+    if name in ("footprint", "height"):
+        return f"{100 * value:g} cm"
+    if name in ("depth", "finger_radius"):
+        return f"{1000 * value:g} mm"
+    return f"{value:g}"
+
+
+_PANELS = (
+    ("turn_error_deg", "turn error (deg)", TURN_TARGET_DEG, "turn_counted"),
+    ("slide_error_pct", "slide error (% of travel)", SLIDE_TARGET_PCT, "slide_counted"),
+    ("slip_error_pct", "slip vs Coulomb (%)", SLIP_TARGET_PCT, ""),
+)
+
+
+def _colour(ratio: float) -> tuple[int, int, int]:
+    """BGR from green (0) through yellow (at the target, 1) to red (2 and beyond)."""
+    if not math.isfinite(ratio):
+        return (200, 200, 200)
+    t = min(max(ratio, 0.0), 2.0) / 2.0
+    green, yellow, red = np.array([120, 200, 90]), np.array([80, 220, 240]), np.array([70, 70, 220])
+    mix = (
+        green + (yellow - green) * (t / 0.5)
+        if t <= 0.5
+        else yellow + (red - yellow) * ((t - 0.5) / 0.5)
+    )
+    return tuple(int(v) for v in mix)  # type: ignore[return-value]
+
+
+def _hatch(img: NDArray[np.uint8], x0: int, y0: int, x1: int, y1: int) -> None:
+    for k in range(-(y1 - y0), x1 - x0, 8):
+        a = (x0 + max(k, 0), y0 + max(-k, 0))
+        b = (x0 + min(k + (y1 - y0), x1 - x0), y0 + min(x1 - x0 - k, y1 - y0))
+        cv2.line(img, a, b, (150, 150, 150), 1, cv2.LINE_AA)
+
+
+def heat_map_png(grid_map: GridMap, results: Sequence[CellResult], path: Path) -> Path:
+    """One PNG per map: a panel per error, each cell coloured by its |error| over the
+    target (green under, red at twice), its value printed; hatched: not counted
+    (margin under :data:`MARGIN`)."""
+    by_key = {(getattr(r.cell, grid_map.x), getattr(r.cell, grid_map.y)): r for r in results}
+    nx, ny = len(grid_map.x_values), len(grid_map.y_values)
+    cw, ch, left, top, gap = 74, 40, 80, 60, 40
+    panel_w = nx * cw
+    width = left + len(_PANELS) * (panel_w + gap) + 10
+    height = top + ny * ch + 60
+    img = np.full((height, width, 3), 255, np.uint8)
+    cv2.putText(img, grid_map.title, (10, 22), FONT, 0.6, INK, 1, cv2.LINE_AA)
+    for p, (key, label, target, counted) in enumerate(_PANELS):
+        x_start = left + p * (panel_w + gap)
+        cv2.putText(img, label, (x_start, 48), FONT, 0.45, INK, 1, cv2.LINE_AA)
+        for j, yv in enumerate(grid_map.y_values):
+            y0 = top + (ny - 1 - j) * ch
+            if p == 0:
+                cv2.putText(img, _fmt(grid_map.y, yv), (6, y0 + ch // 2 + 5), FONT, 0.4, INK, 1)
+            for i, xv in enumerate(grid_map.x_values):
+                x0 = x_start + i * cw
+                r = by_key.get((xv, yv))
+                value = math.nan if r is None else float(getattr(r, key))
+                cv2.rectangle(
+                    img, (x0, y0), (x0 + cw - 2, y0 + ch - 2), _colour(abs(value) / target), -1
+                )
+                if r is not None and counted and not getattr(r, counted):
+                    _hatch(img, x0, y0, x0 + cw - 2, y0 + ch - 2)
+                text = (
+                    "-"
+                    if not math.isfinite(value)
+                    else f"{value:+.2f}"
+                    if abs(value) < 10
+                    else f"{value:+.0f}"
+                )
+                (tw, _), _ = cv2.getTextSize(text, FONT, 0.42, 1)
+                cv2.putText(
+                    img,
+                    text,
+                    (x0 + (cw - tw) // 2, y0 + ch // 2 + 5),
+                    FONT,
+                    0.42,
+                    INK,
+                    1,
+                    cv2.LINE_AA,
+                )
+                if j == 0:
+                    label_x = _fmt(grid_map.x, xv)
+                    (tw, _), _ = cv2.getTextSize(label_x, FONT, 0.38, 1)
+                    cv2.putText(
+                        img, label_x, (x0 + (cw - tw) // 2, top + ny * ch + 14), FONT, 0.38, INK, 1
+                    )
+        cv2.putText(
+            img, grid_map.x.replace("_", " "), (x_start + panel_w // 2 - 30, top + ny * ch + 36),
+            FONT, 0.42, MUTED, 1, cv2.LINE_AA,
+        )  # fmt: skip
+    cv2.putText(
+        img, f"green: under target, red: twice it; hatched: margin < {MARGIN:g}, not counted",
+        (10, height - 8), FONT, 0.4, MUTED, 1, cv2.LINE_AA,
+    )  # fmt: skip
+    return write_png(img, path)
+
+
+def write_outputs(
+    results: Sequence[CellResult], out: Path, maps: Sequence[GridMap] = MAPS
+) -> Iterator[Path]:
+    yield write_csv(results, out / "grid.csv")
+    md = out / "grid.md"
+    md.write_text(summary(results) + "\n")
+    yield md
+    for grid_map in maps:
+        rows = [r for r in results if r.map == grid_map.name]
+        if rows:
+            yield heat_map_png(grid_map, rows, out / f"grid_{grid_map.name}.png")

@@ -1,0 +1,105 @@
+"""The grasp-space grid: its cells, margins, measurements and outputs.
+
+The grid's own figures (which cells meet the targets) are the README's, from
+``graspenv bench --grid``; here the canonical cell, played at a seeded place off the
+canonical scene's pixels, must meet them, and the bookkeeping must be right."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import cv2
+import pytest
+
+from graspenv.bench import grid
+from graspenv.config import SceneConfig, load_config
+
+
+@pytest.fixture(scope="module")
+def base() -> SceneConfig:
+    return load_config(None)
+
+
+@pytest.fixture(scope="module")
+def canonical(base: SceneConfig) -> grid.CellResult:
+    (cell,) = grid.placed([grid.BASE_CELL], seed=3)
+    return grid.measure_cell(cell, base, "test")
+
+
+def test_the_canonical_cell_off_its_pixels_meets_the_targets(
+    canonical: grid.CellResult,
+) -> None:
+    assert canonical.turn_counted and canonical.slide_counted
+    assert abs(canonical.turn_error_deg) <= grid.TURN_TARGET_DEG, canonical
+    assert abs(canonical.slide_error_pct) <= grid.SLIDE_TARGET_PCT, canonical
+    assert math.isfinite(canonical.slip_error_pct)
+
+
+def test_margins_follow_coulomb(base: SceneConfig, canonical: grid.CellResult) -> None:
+    """The margins from the measured normal force, computed again by hand."""
+    cell = canonical.cell
+    mu_f = base.proxy.particle_friction * cell.friction
+    mu_t = base.physics.table_friction * cell.friction
+    weight = cell.mass * grid.GRAVITY
+    # Each margin uses its own run's normal force; their mean is the reported one.
+    slide_normal = canonical.slide_margin * mu_t * weight / mu_f
+    turn_normal = (
+        canonical.turn_margin
+        * 2
+        * mu_t
+        * weight
+        * 0.3826
+        * cell.footprint
+        / (mu_f * cell.footprint)
+    )
+    assert 0.5 * (slide_normal + turn_normal) == pytest.approx(canonical.grip_normal_n)
+    # A squeeze of 3 mm presses with tens of newtons (README, "Speed against error").
+    assert 10.0 < canonical.grip_normal_n < 80.0
+
+
+def test_a_heavy_box_is_not_counted() -> None:
+    """Margins under 2 leave a cell out of the targets, and only then."""
+    result = grid.CellResult(grid.BASE_CELL, turn_margin=1.9, slide_margin=2.0)
+    assert not result.turn_counted and result.slide_counted
+
+
+def test_mean_radius_of_square_and_disc() -> None:
+    """r_eff: the mean distance of a footprint's points from its centre (numerically)."""
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    points = rng.uniform(-0.5, 0.5, size=(400_000, 2))
+    square = float(np.hypot(*points.T).mean())
+    disc = float(np.hypot(*points[np.hypot(*points.T) <= 0.5].T).mean())
+    assert grid.Cell(footprint=1.0).mean_radius == pytest.approx(square, rel=2e-3)
+    assert grid.Cell(shape="cylinder", footprint=1.0).mean_radius == pytest.approx(disc, rel=2e-3)
+
+
+def test_maps_sweep_the_issue_ranges() -> None:
+    cells = [c for m in grid.MAPS for c in m.cells()]
+    assert {c.shape for c in cells} == {"box", "cylinder"}
+    assert min(c.footprint for c in cells) == 0.03 and max(c.footprint for c in cells) == 0.12
+    assert min(c.height for c in cells) == 0.01 and max(c.height for c in cells) == 0.08
+    assert min(c.mass for c in cells) == 0.005 and max(c.mass for c in cells) == 2.0
+    assert min(c.depth for c in cells) == 0.001 and max(c.depth for c in cells) == 0.006
+    assert min(c.finger_radius for c in cells) == 0.005
+    assert max(c.finger_radius for c in cells) == 0.012
+    placed = grid.placed(cells)
+    assert len({c.position for c in placed}) == len(placed)  # every cell its own place
+
+
+def test_outputs_round_trip(tmp_path: Path, canonical: grid.CellResult) -> None:
+    light = replace(canonical, cell=replace(canonical.cell, mass=0.02), turn_margin=1.0)
+    results = [replace(canonical, map="boxes"), replace(light, map="boxes")]
+    paths = list(grid.write_outputs(results, tmp_path))
+    names = {p.name for p in paths}
+    assert {"grid.csv", "grid.md", "grid_boxes.png"} <= names
+    again = grid.read_csv(tmp_path / "grid.csv")
+    assert [r.cell for r in again] == [r.cell for r in results]
+    assert again[0].turn_error_deg == pytest.approx(results[0].turn_error_deg)
+    assert not again[1].turn_counted
+    image = cv2.imread(str(tmp_path / "grid_boxes.png"))
+    assert image is not None and image.shape[0] > 100
+    assert "| boxes |" in (tmp_path / "grid.md").read_text()

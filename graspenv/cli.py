@@ -184,7 +184,9 @@ def _bench(args: argparse.Namespace) -> int:
         if args.from_csv is not None:
             cells = grid.read_csv(Path(args.from_csv))
         else:
-            cells = grid.run_grid(config=args.config, progress=_say, workers=args.workers)
+            cells = grid.run_grid(
+                config=args.config, progress=_say, workers=args.workers, preset=args.preset
+            )
         print(grid.summary(cells))
         for path in grid.write_outputs(cells, Path(args.out)):
             print(f"wrote {path}")
@@ -259,6 +261,11 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--workers", type=int, default=2, help="--grid: processes measuring cells at once"
+    )
+    p.add_argument(
+        "--preset",
+        default="default",
+        help="--grid: the fidelity preset the grid runs at (fast, default, reference)",
     )
     p.add_argument("--runs", type=int, default=3, help="--speed: whole runs of each scene")
     p.add_argument(

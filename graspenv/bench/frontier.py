@@ -88,7 +88,7 @@ SLIP_FRAMES = 900  # the ramp gives up at SLIP_RATE × 15 s = 90 N (the figure i
 SLIP_SPEED = 0.01
 CREEP_DISTANCE = 0.0005  # metres of creep reported as ``creep_force_n``
 
-#: The reference fidelity: every knob at its most accurate swept value.
+#: The reference fidelity (graspenv/config.py, FIDELITY_PRESETS, says what it holds).
 REFERENCE = FIDELITY_PRESETS["reference"]
 
 

@@ -60,7 +60,7 @@ from numpy.typing import NDArray
 
 from graspenv.bench.frontier import Played, play, push_until_slip
 from graspenv.bench.interactions import FINGER_RADIUS, pinch, with_objects
-from graspenv.config import ObjectConfig, SceneConfig, load_config
+from graspenv.config import FIDELITY_PRESETS, ObjectConfig, SceneConfig, load_config
 from graspenv.geometry import tilt_angle, yaw_of
 from graspenv.plots import FONT, INK, MUTED, write_png
 from graspenv.simulation import Simulation
@@ -312,9 +312,16 @@ def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = ""
     return result
 
 
-def _measure(job: tuple[Cell, str, str | None]) -> CellResult:
-    cell, map_name, config = job
-    return measure_cell(cell, load_config(config), map_name)
+def base_scene(config: str | None = None, preset: str = "default") -> SceneConfig:
+    """The scene file (or the built-in default) with a fidelity preset applied."""
+    if preset not in FIDELITY_PRESETS:
+        raise ValueError(f"unknown preset {preset!r}; choose from {sorted(FIDELITY_PRESETS)}")
+    return load_config(config).replace(**FIDELITY_PRESETS[preset])
+
+
+def _measure(job: tuple[Cell, str, str | None, str]) -> CellResult:
+    cell, map_name, config, preset = job
+    return measure_cell(cell, base_scene(config, preset), map_name)
 
 
 def grid_jobs(maps: Sequence[GridMap], seed: int = 0) -> list[tuple[Cell, str]]:
@@ -332,9 +339,12 @@ def run_grid(
     progress: Callable[[str], None] | None = None,
     workers: int = 1,
     seed: int = 0,
+    preset: str = "default",
 ) -> list[CellResult]:
-    """Measure every cell of ``maps`` (in ``workers`` processes)."""
-    jobs = [(cell, name, config) for cell, name in grid_jobs(maps, seed)]
+    """Measure every cell of ``maps`` (in ``workers`` processes) on the scene file
+    ``config`` (or the built-in default) at a fidelity ``preset``."""
+    base_scene(config, preset)  # a bad file or preset fails here, not in a worker
+    jobs = [(cell, name, config, preset) for cell, name in grid_jobs(maps, seed)]
     results: list[CellResult] = []
 
     def note(result: CellResult) -> None:
@@ -454,8 +464,13 @@ def _hatch(img: NDArray[np.uint8], x0: int, y0: int, x1: int, y1: int) -> None:
 
 
 def heat_map_png(grid_map: GridMap, results: Sequence[CellResult], path: Path) -> Path:
-    """One PNG per map: a panel per error, each cell coloured by its |error| over the
-    target (green under, red at twice), its value printed; hatched: not counted
+    """:func:`heat_map_image` written to ``path``."""
+    return write_png(heat_map_image(grid_map, results), path)
+
+
+def heat_map_image(grid_map: GridMap, results: Sequence[CellResult]) -> NDArray[np.uint8]:
+    """One picture per map: a panel per error, each cell coloured by its |error| over
+    the target (green under, red at twice), its value printed; hatched: not counted
     (margin under :data:`MARGIN`)."""
     by_key = {(getattr(r.cell, grid_map.x), getattr(r.cell, grid_map.y)): r for r in results}
     nx, ny = len(grid_map.x_values), len(grid_map.y_values)
@@ -513,7 +528,7 @@ def heat_map_png(grid_map: GridMap, results: Sequence[CellResult], path: Path) -
         img, f"green: under target, red: twice it; hatched: margin < {MARGIN:g}, not counted",
         (10, height - 8), FONT, 0.4, MUTED, 1, cv2.LINE_AA,
     )  # fmt: skip
-    return write_png(img, path)
+    return img
 
 
 def write_outputs(
@@ -523,7 +538,20 @@ def write_outputs(
     md = out / "grid.md"
     md.write_text(summary(results) + "\n")
     yield md
+    panels = []
     for grid_map in maps:
         rows = [r for r in results if r.map == grid_map.name]
         if rows:
-            yield heat_map_png(grid_map, rows, out / f"grid_{grid_map.name}.png")
+            image = heat_map_image(grid_map, rows)
+            panels.append(image)
+            yield write_png(image, out / f"grid_{grid_map.name}.png")
+    if panels:
+        # All maps in one picture for the README.
+        width = max(p.shape[1] for p in panels)
+        stacked = np.vstack(
+            [
+                np.pad(p, ((0, 0), (0, width - p.shape[1]), (0, 0)), constant_values=255)
+                for p in panels
+            ]
+        )
+        yield write_png(stacked, out / "grid.png")

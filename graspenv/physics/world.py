@@ -980,6 +980,7 @@ class PhysicsWorld:
             deterministicOverlappingPairs=1,
             allowedCcdPenetration=physics.allowed_ccd_penetration,
             contactBreakingThreshold=physics.contact_breaking_threshold,
+            contactERP=physics.contact_erp,
             physicsClientId=client,
         )
         width, depth = self.scene.surface.size
@@ -1083,7 +1084,8 @@ class PhysicsWorld:
                 baseVisualShapeIndex=visual,
                 basePosition=position,
                 baseOrientation=orientation,
-                useMaximalCoordinates=True,
+                # physics.reduced_objects: a one-link multibody (config.py says why).
+                useMaximalCoordinates=not self.scene.physics.reduced_objects,
                 physicsClientId=client,
             )
         )

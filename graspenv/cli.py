@@ -191,6 +191,13 @@ def _bench(args: argparse.Namespace) -> int:
         for path in grid.write_outputs(cells, Path(args.out)):
             print(f"wrote {path}")
         return 0
+    if args.fuzz is not None:
+        from graspenv.bench.fuzz import run_fuzz
+
+        fuzzed = run_fuzz(args.fuzz, args.seed, args.workers, _say)
+        print(fuzzed.text())
+        print(f"wrote {fuzzed.write(Path(args.out) / 'fuzz.csv')}")
+        return 1 if fuzzed.failures else 0
     if args.soak is not None:
         from graspenv.bench.soak import soak
 
@@ -260,7 +267,16 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
         "grid_*.png heat maps); with --from-csv, draw them again from a grid.csv",
     )
     p.add_argument(
-        "--workers", type=int, default=2, help="--grid: processes measuring cells at once"
+        "--fuzz",
+        type=int,
+        default=None,
+        metavar="N",
+        help="instead: N random hard episodes, the stability invariants checked on every "
+        "frame (fuzz.csv); exit 1 if any broke",
+    )
+    p.add_argument("--seed", type=int, default=0, help="--fuzz: the first episode's seed")
+    p.add_argument(
+        "--workers", type=int, default=2, help="--grid, --fuzz: processes working at once"
     )
     p.add_argument(
         "--preset",

@@ -1,0 +1,60 @@
+"""The long fuzz (``graspenv bench --fuzz N``): its episodes cover what the issue asks,
+they replay the same from a seed, and a small seeded sample keeps its record.
+
+The sample's record is not a target: it lists the episodes that break an invariant
+today, each with its cause, so that a new violation fails here and a fixed one does
+too (update the list and the README's figure then). The long run's figures are the
+README's ("Stability on hard cases").
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from graspenv.bench import fuzz
+
+#: Seeds 0-23: the ones that break an invariant, and why.
+KNOWN_BROKEN = {
+    # A Bullet cylinder resting on the table sinks 2-3 mm into it where their combined
+    # friction is under about 0.05: this 12 g one (0.011) by 2.07 mm after 40 empty
+    # frames, no finger needed.
+    14: ["tunnelling"],
+    # A 442 g cylinder pushed by a slow fingertip over a table of combined friction
+    # 0.11 sinks 2.02 mm (at rest it does not).
+    20: ["tunnelling"],
+}
+SAMPLE = range(24)
+
+
+def test_episodes_cover_the_hard_space() -> None:
+    episodes = [fuzz.episode(seed) for seed in range(400)]
+    objects = [o for e in episodes for o in e.scene.objects]
+    masses = [o.mass for o in objects]
+    assert min(masses) < 0.01 and max(masses) > 2.5
+    assert min(o.friction for o in objects) < 0.05 and max(o.friction for o in objects) > 1.9
+    assert {o.shape for o in objects} == {"box", "cylinder", "sphere"}
+    speeds = [math.hypot(*p.velocity) for e in episodes for p in e.fingers]
+    assert max(speeds) > 4.5 and max(speeds) <= fuzz.MAX_SPEED
+    assert sum(e.noise is not None for e in episodes) > 150
+    assert sum(len(e.scene.objects) == 2 for e in episodes) > 25  # 40 of 400
+    # The crossing pairs: two fingertips whose paths meet (their contacts merge).
+    crossing = 0
+    for e in episodes:
+        for a, b in zip(e.fingers, e.fingers[1:], strict=False):
+            meet = np.add(a.start, np.multiply(a.velocity, 0.25))
+            if np.allclose(meet, np.add(b.start, np.multiply(b.velocity, 0.25)), atol=1e-9):
+                crossing += 1
+    assert crossing > 80
+
+
+def test_an_episode_replays_the_same_from_its_seed() -> None:
+    assert fuzz.episode(7) == fuzz.episode(7)
+    first, again = fuzz.play(14), fuzz.play(14)
+    assert (first.broken, first.first) == (again.broken, again.first)
+
+
+def test_the_seeded_sample_keeps_its_record() -> None:
+    broken = {seed: outcome.broken for seed in SAMPLE if (outcome := fuzz.play(seed)).broken}
+    assert broken == KNOWN_BROKEN

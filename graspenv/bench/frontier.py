@@ -52,7 +52,6 @@ from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
-import pybullet as pb
 from numpy.typing import NDArray
 
 from graspenv.bench.interactions import BOX, CLEARANCE, FINGER_RADIUS, pinch, with_objects
@@ -358,8 +357,10 @@ def push_until_slip(
             state["normal"].append(float(report.normal_force[fingers].sum()))
             state["table"].append(float(report.normal_force[table].sum()))
         if index + 1 >= ramp_start:
-            position, q = sim.object_pose("box")
-            rotation = np.asarray(pb.getMatrixFromQuaternion(q)).reshape(3, 3)
+            states = sim.world.object_states()
+            row = sim.world.object_index("box")
+            position = states.position[row]
+            rotation = states.rotation[row].reshape(3, 3)
             if state["start"] is None:
                 report = sim.contact_report("box")
                 ids = np.unique(report.particle[report.particle >= 0])

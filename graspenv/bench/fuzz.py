@@ -25,7 +25,7 @@ from __future__ import annotations
 import csv
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -37,7 +37,16 @@ from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
 from graspenv.simulation import Simulation
 from graspenv.surface import Fingertip, Hand, SensorNoise, render_mask
 
-__all__ = ["Episode", "FingerPath", "FuzzReport", "Outcome", "episode", "play", "run_fuzz"]
+__all__ = [
+    "Episode",
+    "FingerPath",
+    "FuzzReport",
+    "Outcome",
+    "episode",
+    "finger_hands",
+    "play",
+    "run_fuzz",
+]
 
 TABLE_SIZE = (0.32, 0.24)
 TABLE_PIXELS = (320, 240)
@@ -48,14 +57,35 @@ MAX_SPEED = 5.0  # m/s
 
 @dataclass(frozen=True)
 class FingerPath:
-    """A fingertip on a straight line at constant speed, touching from frame
-    ``down`` until before frame ``up``."""
+    """A fingertip on a straight line at constant speed.
+
+    Attributes:
+        start: centre at frame 0, metres, (x, y).
+        velocity: m/s, (x, y).
+        radius: metres.
+        down: first frame it touches the table.
+        up: first frame it is lifted again (past the last frame: never).
+    """
 
     start: tuple[float, float]
     velocity: tuple[float, float]
     radius: float
     down: int
     up: int
+
+
+def finger_hands(paths: Sequence[FingerPath], frames: int, dt: float) -> list[Hand]:
+    """The hand of each of ``frames`` frames ``dt`` seconds apart, a fingertip on
+    each path (named ``finger <i>``)."""
+    out = []
+    for frame in range(frames):
+        hand = Hand()
+        for i, path in enumerate(paths):
+            centre = np.asarray(path.start) + frame * dt * np.asarray(path.velocity)
+            tip = Fingertip(centre, radii=(path.radius, path.radius), linear_velocity=path.velocity)
+            hand.add(f"finger {i}", tip, touching=path.down <= frame < path.up)
+        out.append(hand)
+    return out
 
 
 @dataclass(frozen=True)
@@ -68,18 +98,7 @@ class Episode:
     noise: SensorNoise | None
 
     def hands(self) -> list[Hand]:
-        dt = 1.0 / self.scene.surface.fps
-        out = []
-        for frame in range(FRAMES):
-            hand = Hand()
-            for i, path in enumerate(self.fingers):
-                centre = np.asarray(path.start) + frame * dt * np.asarray(path.velocity)
-                tip = Fingertip(
-                    centre, radii=(path.radius, path.radius), linear_velocity=path.velocity
-                )
-                hand.add(f"finger {i}", tip, touching=path.down <= frame < path.up)
-            out.append(hand)
-        return out
+        return finger_hands(self.fingers, FRAMES, 1.0 / self.scene.surface.fps)
 
     def describe(self) -> str:
         objects = ", ".join(

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from graspenv.bench.fuzz import FingerPath, finger_hands
 from graspenv.bench.invariants import InvariantChecker, hand_speed
 from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
 from graspenv.simulation import Simulation
@@ -420,38 +421,11 @@ def noisy(min_area: float | None = None) -> Case:
 # -- random fingers (the property test) ----------------------------------------------
 
 
-@dataclass(frozen=True)
-class FingerPath:
-    """A fingertip moving in a straight line at constant speed.
-
-    Attributes:
-        start: centre at frame 0, metres, (x, y).
-        velocity: m/s, (x, y).
-        radius: metres.
-        down: first frame it touches the table.
-        up: first frame it is lifted again (past the last frame: never).
-    """
-
-    start: tuple[float, float]
-    velocity: tuple[float, float]
-    radius: float
-    down: int
-    up: int
-
-
 def random_fingers(paths: Sequence[FingerPath], frames: int, obj: ObjectConfig) -> Case:
     """Fingertips on :class:`FingerPath` s around an object for ``frames`` frames,
     then 3 empty frames (default settings on the small table)."""
     config = scene(obj)
-    dt = 1.0 / config.surface.fps
-    hands = []
-    for frame in range(frames):
-        hand = Hand()
-        for i, path in enumerate(paths):
-            centre = np.asarray(path.start) + frame * dt * np.asarray(path.velocity)
-            tip = Fingertip(centre, radii=(path.radius, path.radius), linear_velocity=path.velocity)
-            hand.add(f"finger {i}", tip, touching=path.down <= frame < path.up)
-        hands.append(hand)
+    hands = finger_hands(paths, frames, 1.0 / config.surface.fps)
     return played("random fingers", config, hands, extra_frames=3)
 
 

@@ -179,8 +179,6 @@ def _bench(args: argparse.Namespace) -> int:
     if args.grid:
         from graspenv.bench import grid
 
-        if args.workers < 1:
-            raise ValueError(f"--workers must be at least 1, got {args.workers}")
         if args.from_csv is not None:
             cells = grid.read_csv(Path(args.from_csv))
         else:

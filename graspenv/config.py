@@ -300,12 +300,11 @@ class PhysicsConfig:
             centre of mass spin about the grip's normal (a 3 cm box held 2 mm up slips
             at 3 % of Coulomb's force); in reduced coordinates it holds, but the
             contacts are softer (raise ``contact_erp``) and a box on a table of
-            friction 2 rattles at four sub-steps (docs/design.md, "Objects in reduced
-            coordinates"). On in ``reference``.
+            friction 2 rattles at four sub-steps (docs/design.md, section 3b). On in
+            ``reference``.
         contact_erp: the share of a contact's penetration Bullet corrects in one
             step (its ``contactERP``; PyBullet's own default is 0.08). It sets how
-            far a squeezing particle sinks into an object (docs/design.md, "Objects in
-            reduced coordinates").
+            far a squeezing particle sinks into an object (docs/design.md, section 3b).
         control_time: Δt of the particle control law (v* = (x* − x)/Δt,
             a* = (v* − v)/Δt), seconds. A particle held off its contour point by a
             depth d pushes with m·d/Δt², so this and ``proxy.particle_mass`` set the

@@ -60,7 +60,13 @@ from numpy.typing import NDArray
 
 from graspenv.bench.frontier import Played, play, push_until_slip
 from graspenv.bench.interactions import FINGER_RADIUS, pinch, with_objects
-from graspenv.config import FIDELITY_PRESETS, ObjectConfig, SceneConfig, load_config
+from graspenv.config import (
+    FIDELITY_PRESETS,
+    ObjectConfig,
+    SceneConfig,
+    load_config,
+    resolve_fidelity,
+)
 from graspenv.geometry import tilt_angle, yaw_of
 from graspenv.plots import FONT, INK, MUTED, write_png
 from graspenv.simulation import Simulation
@@ -177,14 +183,6 @@ MAPS: tuple[GridMap, ...] = (
         (0.005, 0.007, 0.009, 0.012),
     ),
 )
-#: A few cells that cover the failure modes once seen (small, light, tall, a
-#: cylinder), for the test suite.
-QUICK_CELLS: tuple[Cell, ...] = (
-    replace(BASE_CELL, footprint=0.04),
-    replace(BASE_CELL, mass=0.02),
-    replace(BASE_CELL, height=0.08, depth=0.0045),
-    replace(BASE_CELL, shape="cylinder", footprint=0.045, mass=0.5),
-)
 
 
 def placed(cells: Sequence[Cell], seed: int = 0) -> list[Cell]:
@@ -247,9 +245,12 @@ def _coefficients(base: SceneConfig, cell: Cell) -> tuple[float, float]:
     return base.proxy.particle_friction * cell.friction, base.physics.table_friction * cell.friction
 
 
-def _grasp_run(base: SceneConfig, cell: Cell, motion: str) -> tuple[Played, float, float]:
-    """Squeeze and turn (or slide) the pair; the run, the mean finger normal force
-    over the motion (N) and the largest tilt (degrees)."""
+def _grasp_run(
+    base: SceneConfig, cell: Cell, motion: str
+) -> tuple[NDArray[np.float64], float, float, float]:
+    """Squeeze and turn (or slide) the pair; the object's final (x, y, z, yaw), how
+    far it turned (radians, unwrapped), the mean finger normal force over the motion
+    (N) and the largest tilt (degrees)."""
     obj = cell.object()
     if motion == "turn":
         kwargs: dict[str, Any] = {"turn": TURN, "turn_frames": 90, "slide_frames": 0}
@@ -272,8 +273,8 @@ def _grasp_run(base: SceneConfig, cell: Cell, motion: str) -> tuple[Played, floa
         return False
 
     played = play(with_objects(base, obj), script, ["box"], (), each_frame=each)
-    played.errors["turned"] = state["yaw"]
-    return played, float(np.mean(normal)) if normal else 0.0, state["tilt"]
+    mean_normal = float(np.mean(normal)) if normal else 0.0
+    return played.final["box"], state["yaw"], mean_normal, state["tilt"]
 
 
 def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = "") -> CellResult:
@@ -283,15 +284,15 @@ def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = ""
     weight = cell.mass * GRAVITY
     result = CellResult(cell, map_name)
 
-    turned, turn_normal, turn_tilt = _grasp_run(base, cell, "turn")
-    result.turn_error_deg = math.degrees(turned.errors["turned"] - TURN)
+    _, turned, turn_normal, turn_tilt = _grasp_run(base, cell, "turn")
+    result.turn_error_deg = math.degrees(turned - TURN)
     # The contacts are the fingertips' on the two faces: the footprint apart.
     result.turn_margin = (
         mu_f * turn_normal * cell.footprint / (2.0 * mu_t * weight * cell.mean_radius)
     )
 
-    slid, slide_normal, slide_tilt = _grasp_run(base, cell, "slide")
-    x, y = slid.final["box"][:2]
+    final, _, slide_normal, slide_tilt = _grasp_run(base, cell, "slide")
+    x, y = final[:2]
     ideal = (cell.position[0], cell.position[1] + SLIDE)
     result.slide_error_pct = 100.0 * math.hypot(x - ideal[0], y - ideal[1]) / SLIDE
     result.slide_margin = mu_f * slide_normal / (mu_t * weight)
@@ -314,9 +315,7 @@ def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = ""
 
 def base_scene(config: str | None = None, preset: str = "default") -> SceneConfig:
     """The scene file (or the built-in default) with a fidelity preset applied."""
-    if preset not in FIDELITY_PRESETS:
-        raise ValueError(f"unknown preset {preset!r}; choose from {sorted(FIDELITY_PRESETS)}")
-    return load_config(config).replace(**FIDELITY_PRESETS[preset])
+    return load_config(config).replace(**FIDELITY_PRESETS[resolve_fidelity(preset)])
 
 
 def _measure(job: tuple[Cell, str, str | None, str]) -> CellResult:
@@ -343,6 +342,8 @@ def run_grid(
 ) -> list[CellResult]:
     """Measure every cell of ``maps`` (in ``workers`` processes) on the scene file
     ``config`` (or the built-in default) at a fidelity ``preset``."""
+    if workers < 1:
+        raise ValueError(f"workers must be at least 1, got {workers}")
     base_scene(config, preset)  # a bad file or preset fails here, not in a worker
     jobs = [(cell, name, config, preset) for cell, name in grid_jobs(maps, seed)]
     results: list[CellResult] = []

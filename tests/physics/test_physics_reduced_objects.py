@@ -5,8 +5,7 @@ A box held between two rows of fixed spheres 13 mm below its centre of mass, pus
 along the rows' line (so that statically nothing needs to move), spins about the
 spheres' contact normal as a maximal-coordinate rigid body and holds as a one-link
 multibody. If a PyBullet release mends the rigid-body path, the first test fails and
-the knob's default can be looked at again (docs/design.md, "Objects in reduced
-coordinates").
+the knob's default can be looked at again (docs/design.md, section 3b).
 """
 
 from __future__ import annotations

@@ -15,8 +15,11 @@ by a depth d (inside an object) pushes with about m·d/Δt² (1152 N/m at the de
 squeezing deeper grips harder). A bottom particle sliding on the table stays short of
 its point by its table friction over that stiffness (about 0.09 mm at the defaults).
 
-In z, a bottom particle is pressed down by ``proxy.down_force`` (its weight is
-cancelled, so the press does not depend on its mass) and, if it rises above the
+In z, a bottom particle resting on an object is pressed down by ``proxy.down_force``
+(a finger's press on its top; its weight is cancelled, so the press does not depend
+on its mass), one on the table by the press scaled with the particle's mass
+(:attr:`SceneConfig.particle_scale`: a full press beside a 5 g box drags it, 10° short
+on a 90° turn, docs/design.md, section 3b), and, if it rises above the
 surface under it (rays once per frame), pulled back by the same law: friction cannot
 hold a bottom particle down (it is planar), and a squeezed face tilted by a degree
 pushes it up harder than the press, so without the pull it could be squirted up a
@@ -65,8 +68,10 @@ class ParticleDrive:
         gain: h / Δt.
         v_max: the commanded speed's limit, m/s.
         dv_max: the velocity change a sub-step's force limit allows, m/s.
-        press_dv: the vertical velocity change of a bottom particle a sub-step (the
-            press, with its weight cancelled), m/s.
+        press_dv: the vertical velocity change of a bottom particle on the table a
+            sub-step (the press, with its weight cancelled), m/s.
+        top_press_dv: the same for a bottom particle resting on an object, m/s.
+        table_rest: the resting height of a particle on the table, metres.
         lift_dv: gravity's velocity change over a sub-step, m/s (an upper particle's
             weight is cancelled).
     """
@@ -83,6 +88,8 @@ class ParticleDrive:
     v_max: float
     dv_max: float
     press_dv: float
+    top_press_dv: float
+    table_rest: float
     lift_dv: float
 
     @classmethod
@@ -95,9 +102,12 @@ class ParticleDrive:
         substeps: int,
         proxy: ProxyConfig,
         physics: PhysicsConfig,
+        top_press: float | None = None,
     ) -> ParticleDrive:
         """The law for a frame in which particles go from ``start`` to ``goal``
-        (metres, (K·L, 2), stacks of ``layers`` bottom first)."""
+        (metres, (K·L, 2), stacks of ``layers`` bottom first), pressed by
+        ``proxy.down_force`` on the table and by ``top_press`` (newtons; the same
+        when None) on an object."""
         h = frame_dt / substeps
         tau = max(physics.control_time, h)
         mass = proxy.particle_mass
@@ -128,6 +138,11 @@ class ParticleDrive:
             dv_max=physics.max_particle_force * h / mass,
             # Bullet adds g·h itself; the weight is cancelled and the press applied.
             press_dv=(physics.gravity - proxy.down_force / mass) * h,
+            top_press_dv=(
+                physics.gravity - (proxy.down_force if top_press is None else top_press) / mass
+            )
+            * h,
+            table_rest=proxy.particle_radius,
             lift_dv=physics.gravity * h,
         )
 
@@ -157,6 +172,8 @@ class ParticleDrive:
             self.v_max,
             self.dv_max,
             self.press_dv,
+            self.top_press_dv,
+            self.table_rest,
             self.lift_dv,
         )
 
@@ -178,6 +195,8 @@ def drive_velocities(
     v_max: float,
     dv_max: float,
     press_dv: float,
+    top_press_dv: float,
+    table_rest: float,
     lift_dv: float,
 ) -> NDArray[np.float64]:
     """One sub-step of the law (module docstring) for every particle: the velocity
@@ -199,11 +218,12 @@ def drive_velocities(
             dvy *= dv_max / size
         new[i, 0] += dvx
         new[i, 1] += dvy
-        new[i, 2] += press_dv
     bottom = 0
     upper = 0
     for i in range(n):
         if is_bottom[i]:
+            on_object = rest_z[bottom] > table_rest + REST_TOLERANCE
+            new[i, 2] += top_press_dv if on_object else press_dv
             # A bottom particle that rose above its support is pulled back.
             excess = position[i, 2] - rest_z[bottom] - REST_TOLERANCE
             if excess > 0.0:

@@ -250,8 +250,10 @@ class PhysicsWorld:
         self._table = -1
         self._floor = -1
         self._build_scene()
-        self.pool = ParticlePool(self.client, scene.proxy, scene.physics)
-        self.rigid_proxies = RigidBodies(self.client, scene.proxy, scene.physics)
+        # The particles' mass, press and force clamp, scaled for a light object.
+        self._particle_proxy, self._particle_physics = scene.particle_settings
+        self.pool = ParticlePool(self.client, self._particle_proxy, self._particle_physics)
+        self.rigid_proxies = RigidBodies(self.client, self._particle_proxy, self._particle_physics)
         # Force on each object (by index) for every sub-step of the next frame, N.
         self._pending_force: dict[int, NDArray[np.float64]] = {}
         self._pending_torque: dict[int, NDArray[np.float64]] = {}
@@ -797,8 +799,9 @@ class PhysicsWorld:
             layers,
             frame_dt,
             self.substeps,
-            self.scene.proxy,
-            self.scene.physics,
+            self._particle_proxy,
+            self._particle_physics,
+            top_press=self.scene.proxy.down_force,
         )
         angular = [(0.0, 0.0, w) for w in np.repeat(spin_z, layers).tolist()]
         self.pool.set_upper(flat, ~drive.is_bottom)

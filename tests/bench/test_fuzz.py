@@ -17,6 +17,11 @@ from graspenv.bench import fuzz
 
 #: Seeds 0-23: the ones that break an invariant, and why.
 KNOWN_BROKEN = {
+    # Since the particles weigh a tenth of the lightest object (2 g beside this 20 g
+    # cylinder; proxy.mass_ratio): a fingertip at 1.7 m/s drives one 1.15 mm into
+    # it in frame 8 (tolerance 1 mm). At a fixed 20 g it kept the invariants, but
+    # 123 of seeds 0-999 broke one against 112 now.
+    0: ["inside_object"],
     # A Bullet cylinder resting on the table sinks 2-3 mm into it where their combined
     # friction is under about 0.05: this 12 g one (0.011) by 2.07 mm after 40 empty
     # frames, no finger needed.

@@ -431,9 +431,14 @@ def random_fingers(paths: Sequence[FingerPath], frames: int, obj: ObjectConfig) 
 
 def stiff_pinch(mass: float = 0.02) -> Case:
     """A light box squeezed 2 mm under a very stiff control law (Δt = 1/2000 s run
-    at 16 sub-steps, so Δt is the 1/960 s sub-step): m·d/Δt² is 37 N a particle."""
+    at 16 sub-steps, so Δt is the 1/960 s sub-step) by 20 g particles (their mass
+    not scaled to the box's, ``proxy.mass_ratio`` off): m·d/Δt² is 37 N a particle."""
     obj = box(mass=mass)
-    config = scene(obj, physics={"substeps": 16, "control_time": 1.0 / 2000.0})
+    config = scene(
+        obj,
+        physics={"substeps": 16, "control_time": 1.0 / 2000.0},
+        proxy={"mass_ratio": 0.0},
+    )
     return pinch(obj, config, "stiff pinch", depth=0.002, turn=0.0, slide=(0.0, 0.0), hold_frames=6)
 
 

@@ -189,6 +189,17 @@ def _bench(args: argparse.Namespace) -> int:
         for path in grid.write_outputs(cells, Path(args.out)):
             print(f"wrote {path}")
         return 0
+    if args.noise:
+        from graspenv.bench import noise
+
+        if args.from_csv is not None:
+            runs = noise.read_csv(Path(args.from_csv))
+        else:
+            runs = noise.run_noise(workers=args.workers, progress=_say)
+        print(noise.summary(runs))
+        for path in noise.write_outputs(runs, Path(args.out)):
+            print(f"wrote {path}")
+        return 0
     if args.fuzz is not None:
         from graspenv.bench.fuzz import run_fuzz
 
@@ -265,6 +276,13 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
         "grid_*.png heat maps); with --from-csv, draw them again from a grid.csv",
     )
     p.add_argument(
+        "--noise",
+        action="store_true",
+        help="instead: grasps through FTIR- and DI-like sensor noise up to four times the "
+        "DI level, with each contact clean-up (noise.csv, noise.md, noise.png); with "
+        "--from-csv, draw them again from a noise.csv",
+    )
+    p.add_argument(
         "--fuzz",
         type=int,
         default=None,
@@ -274,7 +292,7 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--seed", type=int, default=0, help="--fuzz: the first episode's seed")
     p.add_argument(
-        "--workers", type=int, default=2, help="--grid, --fuzz: processes working at once"
+        "--workers", type=int, default=2, help="--grid, --noise, --fuzz: processes working at once"
     )
     p.add_argument(
         "--preset",

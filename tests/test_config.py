@@ -137,3 +137,34 @@ def test_contour_spacing_follows_the_particle_radius() -> None:
     assert fixed.contact_settings.spacing == 0.005
     with pytest.raises(ConfigError, match="spacing"):
         load_config(None, contacts={"spacing": "wide"})
+
+
+def test_particles_weigh_a_share_of_the_lightest_object() -> None:
+    def scene(*masses: float, **proxy: object) -> SceneConfig:
+        objects = [
+            {"name": f"box{i}", "shape": "box", "size": [0.05, 0.05, 0.03], "mass": m}
+            for i, m in enumerate(masses)
+        ]
+        return load_config(None, objects=objects, proxy=proxy)
+
+    default = load_config(None)  # the 0.2 kg box: 20 g particles, as they were
+    assert default.particle_scale == 1.0
+    assert default.particle_settings == (default.proxy, default.physics)
+    light = scene(0.005)
+    assert light.particle_scale == pytest.approx(0.025)
+    proxy, physics = light.particle_settings
+    assert proxy.particle_mass == pytest.approx(0.0005)
+    assert proxy.down_force == pytest.approx(0.05 * 0.025)
+    assert physics.max_particle_force == pytest.approx(5.0 * 0.025)
+    assert scene(2.0).particle_scale == 1.0  # never heavier than particle_mass
+    assert scene(2.0, 0.05).particle_scale == pytest.approx(0.25)  # the lightest
+    assert scene(0.005, mass_ratio=0.0).particle_scale == 1.0
+    with pytest.raises(ConfigError, match="mass_ratio"):
+        load_config(None, proxy={"mass_ratio": -0.1})
+
+
+@pytest.mark.parametrize("key", ["close_px", "fill_px"])
+@pytest.mark.parametrize("value", [-1, 2.5, True, "wide"])
+def test_mask_clean_ups_take_whole_pixels(key: str, value: object) -> None:
+    with pytest.raises(ConfigError, match=key):
+        load_config(None, contacts={key: value})

@@ -143,6 +143,7 @@ def play(
     each_frame: Callable[[Simulation, int, Played], bool] | None = None,
     extra_frames: int = 0,
     replays: int = 1,
+    noise_seed: int = 0,
 ) -> Played:
     """Play a script through a fresh simulation, timing each stage.
 
@@ -158,7 +159,8 @@ def play(
         objects: the objects whose final poses are kept.
         tracked_phases: phases in which the tracking error is measured (the finger
             shapes must move rigidly there: no touch-downs or presses).
-        noise: sensor noise applied to every mask (seeded per run).
+        noise: sensor noise applied to every mask (seeded per run by
+            ``noise_seed``).
         each_frame: called after every frame; returning True ends the run.
         extra_frames: empty frames after the script.
         replays: timing runs (see above), >= 1.
@@ -166,7 +168,7 @@ def play(
     if replays < 1:
         raise ValueError(f"replays must be >= 1, got {replays}")
     result = Played()
-    rng = np.random.default_rng(0)
+    rng = np.random.default_rng(noise_seed)
     tracked = {
         i for name, frames in script.phase_ranges() if name in tracked_phases for i in frames
     }

@@ -70,6 +70,7 @@ from graspenv.config import (
 from graspenv.geometry import tilt_angle, yaw_of
 from graspenv.plots import FONT, INK, MUTED, write_png
 from graspenv.simulation import Simulation
+from graspenv.surface.noise import SensorNoise
 
 __all__ = [
     "BASE_CELL",
@@ -77,6 +78,7 @@ __all__ = [
     "Cell",
     "CellResult",
     "GridMap",
+    "grasp_run",
     "heat_map_png",
     "measure_cell",
     "run_grid",
@@ -245,12 +247,17 @@ def _coefficients(base: SceneConfig, cell: Cell) -> tuple[float, float]:
     return base.proxy.particle_friction * cell.friction, base.physics.table_friction * cell.friction
 
 
-def _grasp_run(
-    base: SceneConfig, cell: Cell, motion: str
+def grasp_run(
+    base: SceneConfig,
+    cell: Cell,
+    motion: str,
+    noise: SensorNoise | None = None,
+    noise_seed: int = 0,
 ) -> tuple[NDArray[np.float64], float, float, float]:
-    """Squeeze and turn (or slide) the pair; the object's final (x, y, z, yaw), how
-    far it turned (radians, unwrapped), the mean finger normal force over the motion
-    (N) and the largest tilt (degrees)."""
+    """Squeeze and turn (or slide) the pair, the masks seen through ``noise`` if
+    given; the object's final (x, y, z, yaw), how far it turned (radians,
+    unwrapped), the mean finger normal force over the motion (N) and the largest
+    tilt (degrees)."""
     obj = cell.object()
     if motion == "turn":
         kwargs: dict[str, Any] = {"turn": TURN, "turn_frames": 90, "slide_frames": 0}
@@ -272,7 +279,7 @@ def _grasp_run(
             normal.append(float(report.normal_force[report.particle >= 0].sum()))
         return False
 
-    played = play(with_objects(base, obj), script, ["box"], (), each_frame=each)
+    played = play(with_objects(base, obj), script, ["box"], (), noise, each, noise_seed=noise_seed)
     mean_normal = float(np.mean(normal)) if normal else 0.0
     return played.final["box"], state["yaw"], mean_normal, state["tilt"]
 
@@ -284,14 +291,14 @@ def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = ""
     weight = cell.mass * GRAVITY
     result = CellResult(cell, map_name)
 
-    _, turned, turn_normal, turn_tilt = _grasp_run(base, cell, "turn")
+    _, turned, turn_normal, turn_tilt = grasp_run(base, cell, "turn")
     result.turn_error_deg = math.degrees(turned - TURN)
     # The contacts are the fingertips' on the two faces: the footprint apart.
     result.turn_margin = (
         mu_f * turn_normal * cell.footprint / (2.0 * mu_t * weight * cell.mean_radius)
     )
 
-    final, _, slide_normal, slide_tilt = _grasp_run(base, cell, "slide")
+    final, _, slide_normal, slide_tilt = grasp_run(base, cell, "slide")
     x, y = final[:2]
     ideal = (cell.position[0], cell.position[1] + SLIDE)
     result.slide_error_pct = 100.0 * math.hypot(x - ideal[0], y - ideal[1]) / SLIDE

@@ -260,6 +260,17 @@ class ContactTracker:
         self._spacing = self.config.contour_spacing()
         self._pixel_area = float(np.prod(surface.pixel_size))
         self._min_area = float(self.config.min_area_pixels(self._pixel_area))
+        close = self.config.close_px
+        self._close = (
+            cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close, close)) if close > 1 else None
+        )
+        fill = self.config.fill_px
+        self._fill = (
+            cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * fill + 1, 2 * fill + 1))
+            if fill > 0
+            else None
+        )
+        self._last_seen: NDArray[np.uint8] | None = None
         # Pixels to world (Surface.pixel_to_world): x = (c + 0.5)·sx − w/2,
         # y = h/2 − (r + 0.5)·sy.
         sx, sy = surface.pixel_size
@@ -268,11 +279,27 @@ class ContactTracker:
         self._next_id = 0
         self._index = 0
 
+    def _clean(self, image: NDArray[np.uint8]) -> NDArray[np.uint8]:
+        """The mask closed (``close_px``) and its dropouts filled (``fill_px``)."""
+        clean: NDArray[np.uint8] = np.minimum(image, 1)  # any non-zero is touched
+        if self._close is not None:
+            clean = np.asarray(cv2.morphologyEx(clean, cv2.MORPH_CLOSE, self._close), np.uint8)
+        if self._fill is not None:
+            # Fill this frame's dropouts from the last frame's mask, but only within
+            # fill_px of what is touched now (a lifted finger is not kept).
+            seen = clean
+            if self._last_seen is not None:
+                near = np.asarray(cv2.dilate(clean, self._fill), np.uint8)
+                clean = clean | (self._last_seen & near)
+            self._last_seen = seen
+        return clean
+
     def reset(self) -> None:
         """Forget all contacts; ids and the frame index start again from 0."""
         self._previous = ContactFrame.empty()
         self._next_id = 0
         self._index = 0
+        self._last_seen = None
 
     def update(self, mask: object) -> ContactFrame:
         """Track the contacts of the next camera frame.
@@ -289,6 +316,8 @@ class ContactTracker:
                 surface's shape.
         """
         image = validate_mask(mask, self.surface.shape)
+        if self._close is not None or self._fill is not None:
+            image = self._clean(image)
         before = self._previous
         if cv2.countNonZero(image) == 0:  # a fifth of tracing an empty frame's borders
             return self._advance(ContactFrame.empty(self._index, before.ids))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -11,7 +12,7 @@ from numpy.typing import NDArray
 
 from graspenv.surface import _checks
 
-__all__ = ["SensorNoise", "as_mask"]
+__all__ = ["TABLE_NOISE", "SensorNoise", "as_mask"]
 
 
 def as_mask(mask: NDArray[np.generic], name: str = "mask") -> NDArray[np.bool_]:
@@ -66,6 +67,19 @@ class SensorNoise:
         _checks.positive(self.hole_radius, "hole_radius")
         _checks.non_negative(self.jitter, "jitter")
         _checks.positive(self.jitter_scale, "jitter_scale")
+
+    def scaled(self, factor: float) -> SensorNoise:
+        """This noise ``factor`` times as strong: the blur, the flip probability
+        (at most 1), the jitter and the number of holes (rounded) scaled; the holes'
+        size and the jitter's length scale kept."""
+        _checks.non_negative(factor, "factor")
+        return dataclasses.replace(
+            self,
+            blur_sigma=self.blur_sigma * factor,
+            salt_pepper=min(1.0, self.salt_pepper * factor),
+            holes=round(self.holes * factor),
+            jitter=self.jitter * factor,
+        )
 
     @property
     def enabled(self) -> bool:
@@ -151,3 +165,28 @@ class SensorNoise:
             cv2.circle(image, (col << shift, row << shift), radius, 0, -1, cv2.LINE_8, shift)
         result: NDArray[np.bool_] = image != 0
         return result
+
+
+#: The noise of two kinds of camera-based table on the default 640 × 480 camera over
+#: a 61 × 46 cm top (about 1 mm a pixel), after the table's own background
+#: subtraction and threshold. What each kind is prone to is from the literature; the
+#: pixel figures are this project's stated assumptions, not measurements of a
+#: particular table (README, "A real sensor's masks"):
+#:
+#: - ``ftir``: frustrated total internal reflection (Han, UIST 2005). Touches light
+#:   up with strong contrast against a dark field, so edges are sharp (blur 0.5 px,
+#:   jitter 0.5 px) and few pixels flip (1e-5, about 3 a frame); a dry fingertip
+#:   couples poorly to bare acrylic and leaves unlit patches (2 holes of 2 px).
+#: - ``di``: diffuse illumination, the kind of Wilson's tables (rear infrared light
+#:   reflected by the hand through a diffuser). Lower contrast and the diffuser's
+#:   blur (1 px), edges that wobble where the threshold meets camera and ambient
+#:   infrared noise (jitter 1 px) and more flipped pixels (1e-4, about 30 a frame);
+#:   dark nails and shadows leave holes (2 of 2.5 px).
+#:
+#: "Seeing through the Fog" (ACM ITS 2010) compares noise reduction on recordings
+#: of FTIR and DI tables. ``graspenv bench --noise`` plays grasps at these levels and
+#: at two and four times the DI level.
+TABLE_NOISE: dict[str, SensorNoise] = {
+    "ftir": SensorNoise(blur_sigma=0.5, salt_pepper=1e-5, holes=2, hole_radius=2.0, jitter=0.5),
+    "di": SensorNoise(blur_sigma=1.0, salt_pepper=1e-4, holes=2, hole_radius=2.5, jitter=1.0),
+}

@@ -334,3 +334,53 @@ def test_continuing_contour_starts_where_the_last_one_did(tracker: ContactTracke
     second = _frame(tracker, [_finger(0.004, 0.002, angle=0.4)])
     start = first.contacts[0].contour[0] + np.array([0.004, 0.002])
     assert np.hypot(*(second.contacts[0].contour[0] - start)) < 0.001
+
+
+def _notched(surface: Surface, radius: float = 2.5) -> tuple[np.ndarray, np.ndarray]:
+    """A fingertip's mask and the same with a dropout of ``radius`` pixels cut into
+    its edge."""
+    mask = render_fingers(surface, [_finger(0.0, 0.0)])
+    notched = mask.copy()
+    rows, cols = np.nonzero(mask)
+    edge_row = round(float(rows.mean()))  # the right edge's middle
+    edge_col = cols[rows == edge_row].max() + 1
+    yy, xx = np.mgrid[: mask.shape[0], : mask.shape[1]]
+    notched[(yy - edge_row) ** 2 + (xx - edge_col) ** 2 <= radius**2] = 0
+    return mask, notched
+
+
+def test_closing_mends_a_crack_but_not_a_bite(surface: Surface) -> None:
+    # A crack narrower than the kernel is filled; a bite the kernel fits inside (a
+    # dropout cut into the edge, as wide as it is deep) is not.
+    mask = render_fingers(surface, [_finger(0.0, 0.0)])
+    rows, cols = np.nonzero(mask)
+    row = round(float(rows.mean()))
+    edge = cols[rows == row].max()
+    notched = mask.copy()
+    notched[row, edge - 4 : edge + 1] = 0  # 1 pixel wide, 5 deep
+    _, bitten = _notched(surface)
+    closing = ContactTracker(surface, ContactConfig(close_px=5))
+    assert closing.update(bitten).contacts[0].area == pytest.approx(
+        ContactTracker(surface).update(bitten).contacts[0].area
+    )
+    whole = ContactTracker(surface).update(mask).contacts[0].area
+    cut = ContactTracker(surface).update(notched).contacts[0].area
+    closed = ContactTracker(surface, ContactConfig(close_px=5)).update(notched).contacts[0].area
+    pixel = float(np.prod(surface.pixel_size))
+    assert whole - cut > 2 * pixel  # the crack took pixels off the contact
+    assert abs(closed - whole) < 0.5 * (whole - cut)
+
+
+def test_fill_mends_a_flickering_dropout_but_not_a_lifted_finger(surface: Surface) -> None:
+    mask, notched = _notched(surface)
+    tracker = ContactTracker(surface, ContactConfig(fill_px=2))
+    whole = tracker.update(mask).contacts[0].area
+    assert tracker.update(notched).contacts[0].area == pytest.approx(whole)
+    # The finger lifts: nothing of it is kept, and no finger far from it is grown.
+    assert len(tracker.update(np.zeros_like(mask))) == 0
+    moved = render_fingers(surface, [_finger(0.05, 0.0)])
+    area = tracker.update(moved).contacts[0].area
+    assert area == pytest.approx(ContactTracker(surface).update(moved).contacts[0].area)
+    tracker.reset()  # forgets the last mask: a notched first frame stays notched
+    cut = ContactTracker(surface).update(notched).contacts[0].area
+    assert tracker.update(notched).contacts[0].area == pytest.approx(cut)

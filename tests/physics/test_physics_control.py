@@ -147,3 +147,27 @@ def test_a_particle_resting_against_a_face_stays_finite(
         world.step_frame(ids, [[x, 0.0]])
         assert np.isfinite(world.pool.positions(ids)).all()
         assert all(np.isfinite(part).all() for part in world.object_pose("box"))
+
+
+def test_a_light_scene_scales_the_table_press_but_not_the_press_on_an_object() -> None:
+    from graspenv.config import load_config
+    from graspenv.physics.control import ParticleDrive
+
+    light = load_config(
+        None, objects=[{"name": "box", "shape": "box", "size": [0.06, 0.06, 0.03], "mass": 0.005}]
+    )
+    proxy, physics = light.particle_settings
+    r = proxy.particle_radius
+    start = np.zeros((2, 2))
+    drive = ParticleDrive.for_frame(
+        start, start, 1, 1 / 60, 4, proxy, physics, top_press=light.proxy.down_force
+    )
+    h = 1 / 240
+    position = np.array([[0.0, 0.0, r], [0.0, 0.0, 0.03 + r]])  # on the table, on the box
+    rest_z = np.array([r, 0.03 + r])
+    v = drive.velocities(1, position, np.zeros((2, 3)), rest_z)
+    g = physics.gravity
+    # The press (weight cancelled) as a velocity change: scaled beside the box, the
+    # finger's whole 0.05 N on it (0.5 g particles: 2.5 N/kg against 100 N/kg).
+    assert v[0, 2] == pytest.approx((g - 0.05 * light.particle_scale / proxy.particle_mass) * h)
+    assert v[1, 2] == pytest.approx((g - 0.05 / proxy.particle_mass) * h)

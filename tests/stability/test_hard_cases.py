@@ -14,6 +14,7 @@ from collections.abc import Callable
 import pytest
 
 from graspenv.bench.invariants import InvariantsBroken, first_difference
+from graspenv.config import FIDELITY_PRESETS
 
 from . import _cases as cases
 from ._cases import Case, box, pinch_box
@@ -115,3 +116,16 @@ def test_hard_case_is_deterministic_and_keeps_the_invariants(build: Callable[[],
     difference = first_difference(first.poses, second.poses)
     assert difference is None, f"{case.name}: {difference}"
     first.assert_ok()
+
+
+# The same cases without their marks: at the reference fidelity every one holds.
+AT_REFERENCE = [pytest.param(*p.values, id=p.id) for p in CASES]  # type: ignore[attr-defined]
+
+
+@pytest.mark.parametrize("build", AT_REFERENCE)
+def test_hard_case_keeps_the_invariants_at_the_reference_fidelity(
+    build: Callable[[], Case],
+) -> None:
+    # The preset's sub-steps and control time replace a case's own.
+    case = build().with_sections(**FIDELITY_PRESETS["reference"])
+    cases.run(case).assert_ok()

@@ -132,3 +132,21 @@ def test_bad_parameters_raise_naming_the_field(field: str, value: float) -> None
 def test_bad_masks_raise(bad: NDArray[np.generic]) -> None:
     with pytest.raises(ValueError, match="mask"):
         SensorNoise(blur_sigma=1.0).apply(bad)
+
+
+def test_scaled_noise_scales_each_kind_and_keeps_the_shapes() -> None:
+    from graspenv.surface.noise import TABLE_NOISE
+
+    di = TABLE_NOISE["di"]
+    twice = di.scaled(2.0)
+    assert twice.blur_sigma == 2 * di.blur_sigma and twice.jitter == 2 * di.jitter
+    assert twice.salt_pepper == 2 * di.salt_pepper and twice.holes == 2 * di.holes
+    assert (twice.hole_radius, twice.jitter_scale) == (di.hole_radius, di.jitter_scale)
+    assert SensorNoise(salt_pepper=0.6).scaled(3.0).salt_pepper == 1.0
+    assert not di.scaled(0.0).enabled
+    with pytest.raises(ValueError, match="factor"):
+        di.scaled(-1.0)
+    # The FTIR table's noise is the milder of the two in every kind.
+    ftir = TABLE_NOISE["ftir"]
+    for key in ("blur_sigma", "salt_pepper", "jitter"):
+        assert getattr(ftir, key) < getattr(di, key)

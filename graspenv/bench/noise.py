@@ -1,0 +1,278 @@
+"""Grasps through a real sensor's masks: ``graspenv bench --noise``.
+
+A pair of fingertips squeezes, turns (90°) and slides (10 cm) a set of objects, the
+masks seen through each noise level of :data:`LEVELS` (the two kinds of table of
+:data:`graspenv.surface.TABLE_NOISE`, then the DI level two and four times over),
+with each clean-up of :data:`CLEANUPS` in the contact pipeline: nothing, the
+smallest-contact filter (``contacts.min_area``, on by default), and the filter with
+a morphological closing (``contacts.close_px``), a fill of flickering dropouts from
+the previous frame (``contacts.fill_px``) or both. Each run is played with two noise
+seeds at a sub-pixel placement of its own.
+
+Ground truth is the ideal rigid grasp: the object turns with the fingers and ends
+where they carry it. A level passes with a clean-up when every run's turn is within
+:data:`TURN_TARGET_DEG` and its slide within :data:`SLIDE_TARGET_PCT` of the travel,
+and no object is dropped (a turn off by more than :data:`DROP_TURN_DEG` or a slide
+by more than :data:`DROP_SLIDE_PCT`: the fingers went on without it).
+
+Outputs: ``noise.csv`` (one row a run), ``noise.md`` (the table) and ``noise.png``
+(the worst turn and slide error against noise level, one line a clean-up).
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from graspenv.bench.grid import SLIDE, TURN, Cell, base_scene, grasp_run, placed
+from graspenv.plots import line_chart, write_png
+from graspenv.surface.noise import TABLE_NOISE, SensorNoise
+
+__all__ = [
+    "CELLS",
+    "CLEANUPS",
+    "LEVELS",
+    "NoiseRun",
+    "run_noise",
+    "summary",
+    "write_outputs",
+]
+
+TURN_TARGET_DEG = 2.0
+SLIDE_TARGET_PCT = 3.0
+DROP_TURN_DEG = 30.0
+DROP_SLIDE_PCT = 25.0
+SEEDS = (0, 1)
+
+#: Noise levels from none to four times the DI table's, weakest first.
+LEVELS: dict[str, SensorNoise | None] = {
+    "clean": None,
+    "ftir": TABLE_NOISE["ftir"],
+    "di": TABLE_NOISE["di"],
+    "di x2": TABLE_NOISE["di"].scaled(2.0),
+    "di x4": TABLE_NOISE["di"].scaled(4.0),
+}
+
+#: The contact pipeline's clean-ups: contacts-section overrides.
+CLEANUPS: dict[str, dict[str, Any]] = {
+    "none": {"min_area": 0.0},
+    "speck filter": {},
+    "filter + close 5 px": {"close_px": 5},
+    "filter + fill 2 px": {"fill_px": 2},
+    "filter + close 5 + fill 2": {"close_px": 5, "fill_px": 2},
+}
+
+#: The objects: the canonical box and the grid's hard corners of it (light, small,
+#: tall, round), each gripped 3 mm deep by 8 mm fingertips.
+CELLS: tuple[Cell, ...] = (
+    Cell(),
+    Cell(mass=0.02),
+    Cell(footprint=0.03),
+    Cell(height=0.06),
+    Cell(shape="cylinder"),
+)
+
+
+@dataclass(frozen=True)
+class NoiseRun:
+    """One object's turn and slide at one noise level, clean-up and seed."""
+
+    level: str
+    cleanup: str
+    cell: Cell
+    seed: int
+    turn_error_deg: float
+    slide_error_pct: float
+
+    @property
+    def dropped(self) -> bool:
+        return not (
+            abs(self.turn_error_deg) <= DROP_TURN_DEG
+            and abs(self.slide_error_pct) <= DROP_SLIDE_PCT
+        )
+
+    @property
+    def ok(self) -> bool:
+        return abs(self.turn_error_deg) <= TURN_TARGET_DEG and (
+            abs(self.slide_error_pct) <= SLIDE_TARGET_PCT
+        )
+
+    def row(self) -> dict[str, object]:
+        cell = asdict(self.cell)
+        x, y = cell.pop("position")
+        return {
+            "level": self.level,
+            "cleanup": self.cleanup,
+            **cell,
+            "x": x,
+            "y": y,
+            "seed": self.seed,
+            "turn_error_deg": self.turn_error_deg,
+            "slide_error_pct": self.slide_error_pct,
+            "dropped": self.dropped,
+        }
+
+
+def _jobs(cells: Sequence[Cell]) -> list[tuple[str, str, Cell, int]]:
+    jobs = []
+    for seed in SEEDS:
+        for cell in placed(cells, seed):
+            for level in LEVELS:
+                for cleanup in CLEANUPS:
+                    jobs.append((level, cleanup, cell, seed))
+    return jobs
+
+
+def measure(job: tuple[str, str, Cell, int]) -> NoiseRun:
+    """Play one job's turn and slide (module docstring)."""
+    level, cleanup, cell, seed = job
+    base = base_scene().replace(contacts=CLEANUPS[cleanup])
+    noise = LEVELS[level]
+    _, turned, _, _ = grasp_run(base, cell, "turn", noise, seed)
+    final, _, _, _ = grasp_run(base, cell, "slide", noise, seed)
+    ideal = (cell.position[0], cell.position[1] + SLIDE)
+    slide = 100.0 * math.hypot(final[0] - ideal[0], final[1] - ideal[1]) / SLIDE
+    return NoiseRun(level, cleanup, cell, seed, math.degrees(turned - TURN), slide)
+
+
+def run_noise(
+    cells: Sequence[Cell] = CELLS,
+    workers: int = 1,
+    progress: Callable[[str], None] | None = None,
+) -> list[NoiseRun]:
+    """Every object at every level with every clean-up and seed, in ``workers``
+    processes."""
+    if workers < 1:
+        raise ValueError(f"workers must be at least 1, got {workers}")
+    jobs = _jobs(cells)
+    runs: list[NoiseRun] = []
+
+    def note(run: NoiseRun) -> None:
+        runs.append(run)
+        if progress is not None:
+            c = run.cell
+            progress(
+                f"[{len(runs)}/{len(jobs)}] {run.level}, {run.cleanup}: {c.shape}"
+                f" {100 * c.footprint:g} x {100 * c.height:g} cm {1000 * c.mass:g} g,"
+                f" seed {run.seed}: turn {run.turn_error_deg:+.2f} deg,"
+                f" slide {run.slide_error_pct:.2f} %{' DROPPED' if run.dropped else ''}"
+            )
+
+    if workers == 1:
+        for job in jobs:
+            note(measure(job))
+    else:
+        with ProcessPoolExecutor(workers) as pool:
+            for run in pool.map(measure, jobs):
+                note(run)
+    return runs
+
+
+def _worst(runs: Sequence[NoiseRun], level: str, cleanup: str) -> tuple[float, float, int, int]:
+    chosen = [r for r in runs if r.level == level and r.cleanup == cleanup]
+    turn = max((abs(r.turn_error_deg) for r in chosen), default=math.nan)
+    slide = max((abs(r.slide_error_pct) for r in chosen), default=math.nan)
+    return turn, slide, sum(r.dropped for r in chosen), len(chosen)
+
+
+def summary(runs: Sequence[NoiseRun]) -> str:
+    """Markdown: for each level and clean-up, the worst turn and slide errors, the
+    drops and whether it meets the targets."""
+    lines = [
+        f"| noise | clean-up | worst turn | worst slide | dropped | within {TURN_TARGET_DEG:g}°"
+        f" and {SLIDE_TARGET_PCT:g} % |",
+        "|---|---|---|---|---|---|",
+    ]
+    for level in LEVELS:
+        for cleanup in CLEANUPS:
+            turn, slide, dropped, n = _worst(runs, level, cleanup)
+            if n == 0:
+                continue
+            ok = sum(r.ok for r in runs if r.level == level and r.cleanup == cleanup)
+            lines.append(
+                f"| {level} | {cleanup} | {turn:.2f}° | {slide:.2f} % | {dropped}/{n} | {ok}/{n} |"
+            )
+    return "\n".join(lines)
+
+
+def write_csv(runs: Sequence[NoiseRun], path: Path) -> Path:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    rows = [r.row() for r in runs]
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return path
+
+
+def read_csv(path: Path) -> list[NoiseRun]:
+    """Runs written by :func:`write_csv`."""
+    runs = []
+    with path.open() as f:
+        for row in csv.DictReader(f):
+            cell = Cell(
+                shape=row["shape"],
+                footprint=float(row["footprint"]),
+                height=float(row["height"]),
+                mass=float(row["mass"]),
+                friction=float(row["friction"]),
+                depth=float(row["depth"]),
+                finger_radius=float(row["finger_radius"]),
+                position=(float(row["x"]), float(row["y"])),
+            )
+            runs.append(
+                NoiseRun(
+                    row["level"],
+                    row["cleanup"],
+                    cell,
+                    int(row["seed"]),
+                    float(row["turn_error_deg"]),
+                    float(row["slide_error_pct"]),
+                )
+            )
+    return runs
+
+
+def chart(runs: Sequence[NoiseRun], path: Path) -> Path:
+    """The worst turn and slide errors against noise level, one line a clean-up,
+    the two panels side by side (a dropped object is drawn at the chart's top)."""
+    levels = [name for name in LEVELS if any(r.level == name for r in runs)]
+    x = list(range(len(levels)))
+    panels = []
+    for index, (title, target) in enumerate(
+        ((f"worst turn error (deg), target {TURN_TARGET_DEG:g}", TURN_TARGET_DEG),
+         (f"worst slide error (%), target {SLIDE_TARGET_PCT:g}", SLIDE_TARGET_PCT))
+    ):  # fmt: skip
+        top = 4.0 * target
+        title += f" (drawn up to {top:g})"
+        series = {}
+        for cleanup in CLEANUPS:
+            ys = [min(_worst(runs, level, cleanup)[index], top) for level in levels]
+            series[cleanup] = (x, ys)
+        series[f"target {target:g}"] = ([0, len(levels) - 1], [target, target])
+        panels.append(
+            line_chart(
+                series,
+                None,
+                title,
+                "noise level: " + ", ".join(f"{i} {name}" for i, name in enumerate(levels)),
+                "",
+                ylim=(0.0, top),
+                size=(620, 400),
+            )
+        )
+    return write_png(np.concatenate(panels, axis=1), path)
+
+
+def write_outputs(runs: Sequence[NoiseRun], out: Path) -> list[Path]:
+    out.mkdir(parents=True, exist_ok=True)
+    md = out / "noise.md"
+    md.write_text(summary(runs) + "\n")
+    return [write_csv(runs, out / "noise.csv"), md, chart(runs, out / "noise.png")]

@@ -46,10 +46,11 @@ from __future__ import annotations
 
 import csv
 import math
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any, Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -64,6 +65,9 @@ from graspenv.surface.render import render_mask
 from graspenv.surface.scripts import FingerMotion, Phase, Script, side_strike
 from graspenv.surface.shapes import Fingertip
 from graspenv.tasks.metrics import coulomb_slip_force
+
+J = TypeVar("J")
+R = TypeVar("R")
 
 __all__ = [
     "QUICK_SETTINGS",
@@ -726,8 +730,28 @@ def measure_reference_row(result: Result) -> Result:
 # -- output ------------------------------------------------------------------------------
 
 
-def write_csv(results: Sequence[Result], path: Path) -> Path:
-    rows = [r.row() for r in results]
+def run_jobs(
+    work: Callable[[J], R],
+    jobs: Iterable[J],
+    workers: int,
+    each: Callable[[R], None],
+    chunksize: int = 1,
+) -> None:
+    """``work`` on every job, in order, in this process (``workers`` 1) or in a pool of
+    ``workers`` processes; ``each`` gets every result as it comes, in job order."""
+    if workers < 1:
+        raise ValueError(f"workers must be at least 1, got {workers}")
+    if workers == 1:
+        for job in jobs:
+            each(work(job))
+        return
+    with ProcessPoolExecutor(workers) as pool:
+        for result in pool.map(work, jobs, chunksize=chunksize):
+            each(result)
+
+
+def write_rows(rows: Sequence[Mapping[str, object]], path: Path) -> Path:
+    """Rows as a CSV file, one column for each key any row has (in first-seen order)."""
     fields = list(dict.fromkeys(k for row in rows for k in row))
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", newline="") as f:
@@ -735,6 +759,10 @@ def write_csv(results: Sequence[Result], path: Path) -> Path:
         writer.writeheader()
         writer.writerows(rows)
     return path
+
+
+def write_csv(results: Sequence[Result], path: Path) -> Path:
+    return write_rows([r.row() for r in results], path)
 
 
 _ROW_FIELDS = (

@@ -26,12 +26,12 @@ import csv
 import math
 import time
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from graspenv.bench.frontier import run_jobs
 from graspenv.bench.invariants import InvariantChecker, hand_speed
 from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
 from graspenv.simulation import Simulation
@@ -296,11 +296,5 @@ def run_fuzz(
             rate = done / (time.perf_counter() - tic)
             progress(f"[{done}/{count}] {bad} broke an invariant; {rate:.1f} episodes/s")
 
-    if workers == 1:
-        for seed in range(first_seed, first_seed + count):
-            note(play(seed))
-    else:
-        with ProcessPoolExecutor(workers) as pool:
-            for outcome in pool.map(play, range(first_seed, first_seed + count), chunksize=8):
-                note(outcome)
+    run_jobs(play, range(first_seed, first_seed + count), workers, note, chunksize=8)
     return FuzzReport(outcomes, time.perf_counter() - tic)

@@ -49,7 +49,6 @@ from __future__ import annotations
 import csv
 import math
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
@@ -58,7 +57,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.bench.frontier import Played, play, push_until_slip
+from graspenv.bench.frontier import Played, play, push_until_slip, run_jobs, write_rows
 from graspenv.bench.interactions import FINGER_RADIUS, pinch, with_objects
 from graspenv.config import (
     FIDELITY_PRESETS,
@@ -368,13 +367,7 @@ def run_grid(
                 f"/{result.slide_margin:.1f}"
             )
 
-    if workers <= 1:
-        for job in jobs:
-            note(_measure(job))
-    else:
-        with ProcessPoolExecutor(workers) as pool:
-            for result in pool.map(_measure, jobs):
-                note(result)
+    run_jobs(_measure, jobs, workers, note)
     return results
 
 
@@ -382,13 +375,7 @@ def run_grid(
 
 
 def write_csv(results: Sequence[CellResult], path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    rows = [r.row() for r in results]
-    with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    return path
+    return write_rows([r.row() for r in results], path)
 
 
 def read_csv(path: Path) -> list[CellResult]:

@@ -24,13 +24,13 @@ from __future__ import annotations
 import csv
 import math
 from collections.abc import Callable, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from graspenv.bench.frontier import run_jobs, write_rows
 from graspenv.bench.grid import SLIDE, TURN, Cell, base_scene, grasp_run, placed
 from graspenv.plots import line_chart, write_png
 from graspenv.surface.noise import TABLE_NOISE, SensorNoise
@@ -149,8 +149,6 @@ def run_noise(
 ) -> list[NoiseRun]:
     """Every object at every level with every clean-up and seed, in ``workers``
     processes."""
-    if workers < 1:
-        raise ValueError(f"workers must be at least 1, got {workers}")
     jobs = _jobs(cells)
     runs: list[NoiseRun] = []
 
@@ -165,13 +163,7 @@ def run_noise(
                 f" slide {run.slide_error_pct:.2f} %{' DROPPED' if run.dropped else ''}"
             )
 
-    if workers == 1:
-        for job in jobs:
-            note(measure(job))
-    else:
-        with ProcessPoolExecutor(workers) as pool:
-            for run in pool.map(measure, jobs):
-                note(run)
+    run_jobs(measure, jobs, workers, note)
     return runs
 
 
@@ -203,13 +195,7 @@ def summary(runs: Sequence[NoiseRun]) -> str:
 
 
 def write_csv(runs: Sequence[NoiseRun], path: Path) -> Path:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    rows = [r.row() for r in runs]
-    with path.open("w", newline="") as f:
-        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
-        writer.writeheader()
-        writer.writerows(rows)
-    return path
+    return write_rows([r.row() for r in runs], path)
 
 
 def read_csv(path: Path) -> list[NoiseRun]:

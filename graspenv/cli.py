@@ -14,6 +14,7 @@ import argparse
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 from graspenv import __version__
 from graspenv.config import ConfigError
@@ -176,28 +177,19 @@ def _bench(args: argparse.Namespace) -> int:
         for path in report.write(Path(args.out)):
             print(f"wrote {path}")
         return 0
-    if args.grid:
-        from graspenv.bench import grid
+    if args.grid or args.noise:
+        from graspenv.bench import grid, noise
 
+        module: Any = grid if args.grid else noise
         if args.from_csv is not None:
-            cells = grid.read_csv(Path(args.from_csv))
+            results = module.read_csv(Path(args.from_csv))
         else:
-            cells = grid.run_grid(
+            run = grid.run_grid if args.grid else noise.run_noise
+            results = run(
                 config=args.config, progress=_say, workers=args.workers, preset=args.preset
             )
-        print(grid.summary(cells))
-        for path in grid.write_outputs(cells, Path(args.out)):
-            print(f"wrote {path}")
-        return 0
-    if args.noise:
-        from graspenv.bench import noise
-
-        if args.from_csv is not None:
-            runs = noise.read_csv(Path(args.from_csv))
-        else:
-            runs = noise.run_noise(workers=args.workers, progress=_say)
-        print(noise.summary(runs))
-        for path in noise.write_outputs(runs, Path(args.out)):
+        print(module.summary(results))
+        for path in module.write_outputs(results, Path(args.out)):
             print(f"wrote {path}")
         return 0
     if args.fuzz is not None:
@@ -297,7 +289,7 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--preset",
         default="default",
-        help="--grid: the fidelity preset the grid runs at (fast, default, reference)",
+        help="--grid, --noise: the fidelity preset they run at (fast, default, reference)",
     )
     p.add_argument("--runs", type=int, default=3, help="--speed: whole runs of each scene")
     p.add_argument(

@@ -106,7 +106,8 @@ class ContactConfig:
             fingertip cut by dropout holes leaves fragments of a few pixels that
             matter to the grip (README, "Frame cost against contacts").
         close_px: width of the elliptical kernel of a morphological closing (OpenCV)
-            applied to each mask before it is traced, pixels; 0 (the default) leaves
+            applied to each mask before it is traced, pixels, odd (an even kernel
+            has no centre and shifts the mask); 0 (the default) leaves
             the mask as it is. It fills dropout holes that cut a contact's edge and
             smooths jittered edges, but joins contacts closer than about its width
             (two fingertips 4 mm apart at 5 px on the default table). Measured
@@ -135,6 +136,9 @@ class ContactConfig:
             value = getattr(self, key)
             if not isinstance(value, int) or isinstance(value, bool) or value < 0:
                 raise ConfigError(f"contacts.{key} must be a whole number >= 0, got {value!r}")
+        if self.close_px % 2 == 0 and self.close_px > 0:
+            # An even kernel has no centre: OpenCV's closing then shifts the mask.
+            raise ConfigError(f"contacts.close_px must be 0 or odd, got {self.close_px}")
 
     def min_area_pixels(self, pixel_area: float) -> float:
         """The smallest component kept, pixels, on a table whose pixels cover

@@ -147,7 +147,9 @@ def test_particles_weigh_a_share_of_the_lightest_object() -> None:
         ]
         return load_config(None, objects=objects, proxy=proxy)
 
-    default = load_config(None)  # the 0.2 kg box: 20 g particles, as they were
+    # The 0.2 kg box: 20 g particles, as they were (0.1 · 0.2 / 0.02 is not exactly
+    # 1 in binary; the scale is).
+    default = load_config(None)
     assert default.particle_scale == 1.0
     assert default.particle_settings == (default.proxy, default.physics)
     light = scene(0.005)
@@ -168,3 +170,9 @@ def test_particles_weigh_a_share_of_the_lightest_object() -> None:
 def test_mask_clean_ups_take_whole_pixels(key: str, value: object) -> None:
     with pytest.raises(ConfigError, match=key):
         load_config(None, contacts={key: value})
+
+
+def test_the_closing_needs_an_odd_kernel() -> None:
+    assert load_config(None, contacts={"close_px": 5}).contacts.close_px == 5
+    with pytest.raises(ConfigError, match="odd"):
+        load_config(None, contacts={"close_px": 4})

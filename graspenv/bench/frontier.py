@@ -47,10 +47,9 @@ from __future__ import annotations
 import csv
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Protocol, TypeVar
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -65,9 +64,6 @@ from graspenv.surface.render import render_mask
 from graspenv.surface.scripts import FingerMotion, Phase, Script, side_strike
 from graspenv.surface.shapes import Fingertip
 from graspenv.tasks.metrics import coulomb_slip_force
-
-J = TypeVar("J")
-R = TypeVar("R")
 
 __all__ = [
     "QUICK_SETTINGS",
@@ -728,26 +724,6 @@ def measure_reference_row(result: Result) -> Result:
 
 
 # -- output ------------------------------------------------------------------------------
-
-
-def run_jobs(
-    work: Callable[[J], R],
-    jobs: Iterable[J],
-    workers: int,
-    each: Callable[[R], None],
-    chunksize: int = 1,
-) -> None:
-    """``work`` on every job, in order, in this process (``workers`` 1) or in a pool of
-    ``workers`` processes; ``each`` gets every result as it comes, in job order."""
-    if workers < 1:
-        raise ValueError(f"workers must be at least 1, got {workers}")
-    if workers == 1:
-        for job in jobs:
-            each(work(job))
-        return
-    with ProcessPoolExecutor(workers) as pool:
-        for result in pool.map(work, jobs, chunksize=chunksize):
-            each(result)
 
 
 def write_rows(rows: Sequence[Mapping[str, object]], path: Path) -> Path:

@@ -31,8 +31,8 @@ from pathlib import Path
 
 import numpy as np
 
-from graspenv.bench.frontier import run_jobs
 from graspenv.bench.invariants import InvariantChecker, hand_speed
+from graspenv.bench.jobs import run_jobs
 from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
 from graspenv.simulation import Simulation
 from graspenv.surface import Fingertip, Hand, SensorNoise, render_mask

@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import csv
 import math
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
@@ -57,8 +57,9 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.bench.frontier import Played, play, push_until_slip, run_jobs, write_rows
+from graspenv.bench.frontier import Played, play, push_until_slip, write_rows
 from graspenv.bench.interactions import FINGER_RADIUS, pinch, with_objects
+from graspenv.bench.jobs import run_jobs
 from graspenv.config import (
     FIDELITY_PRESETS,
     ObjectConfig,
@@ -229,16 +230,28 @@ class CellResult:
         return abs(self.slide_error_pct) <= SLIDE_TARGET_PCT
 
     def row(self) -> dict[str, Any]:
-        row: dict[str, Any] = {"map": self.map}
-        cell = asdict(self.cell)
-        cell["x"], cell["y"] = cell.pop("position")
-        row.update(cell)
+        row: dict[str, Any] = {"map": self.map, **cell_row(self.cell)}
         for f in fields(self):
             if f.name not in ("cell", "map"):
                 row[f.name] = getattr(self, f.name)
         row["turn_counted"] = self.turn_counted
         row["slide_counted"] = self.slide_counted
         return row
+
+
+def cell_row(cell: Cell) -> dict[str, Any]:
+    """A cell as CSV columns: its fields, the position as ``x`` and ``y``."""
+    row = asdict(cell)
+    row["x"], row["y"] = row.pop("position")
+    return row
+
+
+def cell_from_row(row: Mapping[str, str]) -> Cell:
+    """The cell of a CSV row written from :func:`cell_row`."""
+    numbers = {
+        f.name: float(row[f.name]) for f in fields(Cell) if f.name not in ("shape", "position")
+    }
+    return Cell(shape=row["shape"], position=(float(row["x"]), float(row["y"])), **numbers)
 
 
 def _coefficients(base: SceneConfig, cell: Cell) -> tuple[float, float]:
@@ -380,15 +393,12 @@ def write_csv(results: Sequence[CellResult], path: Path) -> Path:
 
 def read_csv(path: Path) -> list[CellResult]:
     """Results written by :func:`write_csv`."""
-    cell_names = {f.name for f in fields(Cell)} - {"position"}
     numbers = {f.name for f in fields(CellResult)} - {"cell", "map"}
-    out = []
     with path.open() as f:
-        for row in csv.DictReader(f):
-            kwargs: dict[str, Any] = {k: float(row[k]) for k in cell_names if k != "shape"}
-            cell = Cell(shape=row["shape"], position=(float(row["x"]), float(row["y"])), **kwargs)
-            out.append(CellResult(cell, row["map"], **{k: float(row[k]) for k in numbers}))
-    return out
+        return [
+            CellResult(cell_from_row(row), row["map"], **{k: float(row[k]) for k in numbers})
+            for row in csv.DictReader(f)
+        ]
 
 
 def summary(results: Sequence[CellResult]) -> str:

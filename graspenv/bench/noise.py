@@ -24,14 +24,24 @@ from __future__ import annotations
 import csv
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from graspenv.bench.frontier import run_jobs, write_rows
-from graspenv.bench.grid import SLIDE, TURN, Cell, base_scene, grasp_run, placed
+from graspenv.bench.frontier import write_rows
+from graspenv.bench.grid import (
+    SLIDE,
+    TURN,
+    Cell,
+    base_scene,
+    cell_from_row,
+    cell_row,
+    grasp_run,
+    placed,
+)
+from graspenv.bench.jobs import run_jobs
 from graspenv.plots import line_chart, write_png
 from graspenv.surface.noise import TABLE_NOISE, SensorNoise
 
@@ -105,14 +115,10 @@ class NoiseRun:
         )
 
     def row(self) -> dict[str, object]:
-        cell = asdict(self.cell)
-        x, y = cell.pop("position")
         return {
             "level": self.level,
             "cleanup": self.cleanup,
-            **cell,
-            "x": x,
-            "y": y,
+            **cell_row(self.cell),
             "seed": self.seed,
             "turn_error_deg": self.turn_error_deg,
             "slide_error_pct": self.slide_error_pct,
@@ -120,20 +126,25 @@ class NoiseRun:
         }
 
 
-def _jobs(cells: Sequence[Cell]) -> list[tuple[str, str, Cell, int]]:
-    jobs = []
+#: One run: noise level, clean-up, object, seed, scene file (None: the built-in
+#: default) and fidelity preset.
+Job = tuple[str, str, Cell, int, str | None, str]
+
+
+def _jobs(cells: Sequence[Cell], config: str | None, preset: str) -> list[Job]:
+    jobs: list[Job] = []
     for seed in SEEDS:
         for cell in placed(cells, seed):
             for level in LEVELS:
                 for cleanup in CLEANUPS:
-                    jobs.append((level, cleanup, cell, seed))
+                    jobs.append((level, cleanup, cell, seed, config, preset))
     return jobs
 
 
-def measure(job: tuple[str, str, Cell, int]) -> NoiseRun:
+def measure(job: Job) -> NoiseRun:
     """Play one job's turn and slide (module docstring)."""
-    level, cleanup, cell, seed = job
-    base = base_scene().replace(contacts=CLEANUPS[cleanup])
+    level, cleanup, cell, seed, config, preset = job
+    base = base_scene(config, preset).replace(contacts=CLEANUPS[cleanup])
     noise = LEVELS[level]
     _, turned, _, _ = grasp_run(base, cell, "turn", noise, seed)
     final, _, _, _ = grasp_run(base, cell, "slide", noise, seed)
@@ -146,10 +157,14 @@ def run_noise(
     cells: Sequence[Cell] = CELLS,
     workers: int = 1,
     progress: Callable[[str], None] | None = None,
+    config: str | None = None,
+    preset: str = "default",
 ) -> list[NoiseRun]:
     """Every object at every level with every clean-up and seed, in ``workers``
-    processes."""
-    jobs = _jobs(cells)
+    processes, on the scene file ``config`` (or the built-in default) at a fidelity
+    ``preset``."""
+    base_scene(config, preset)  # a bad file or preset fails here, not in a worker
+    jobs = _jobs(cells, config, preset)
     runs: list[NoiseRun] = []
 
     def note(run: NoiseRun) -> None:
@@ -203,21 +218,11 @@ def read_csv(path: Path) -> list[NoiseRun]:
     runs = []
     with path.open() as f:
         for row in csv.DictReader(f):
-            cell = Cell(
-                shape=row["shape"],
-                footprint=float(row["footprint"]),
-                height=float(row["height"]),
-                mass=float(row["mass"]),
-                friction=float(row["friction"]),
-                depth=float(row["depth"]),
-                finger_radius=float(row["finger_radius"]),
-                position=(float(row["x"]), float(row["y"])),
-            )
             runs.append(
                 NoiseRun(
                     row["level"],
                     row["cleanup"],
-                    cell,
+                    cell_from_row(row),
                     int(row["seed"]),
                     float(row["turn_error_deg"]),
                     float(row["slide_error_pct"]),

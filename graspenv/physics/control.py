@@ -102,12 +102,12 @@ class ParticleDrive:
         substeps: int,
         proxy: ProxyConfig,
         physics: PhysicsConfig,
-        top_press: float | None = None,
+        top_press: float,
     ) -> ParticleDrive:
         """The law for a frame in which particles go from ``start`` to ``goal``
         (metres, (K·L, 2), stacks of ``layers`` bottom first), pressed by
-        ``proxy.down_force`` on the table and by ``top_press`` (newtons; the same
-        when None) on an object."""
+        ``proxy.down_force`` on the table and by ``top_press`` (newtons) on an
+        object."""
         h = frame_dt / substeps
         tau = max(physics.control_time, h)
         mass = proxy.particle_mass

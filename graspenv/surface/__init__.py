@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from graspenv.surface.geometry import Surface
 from graspenv.surface.hand import Hand
-from graspenv.surface.noise import SensorNoise
+from graspenv.surface.noise import TABLE_NOISE, SensorNoise
 from graspenv.surface.render import AA_EDGE_BIAS, render_coverage, render_mask
 from graspenv.surface.scripts import (
     FingerMotion,
@@ -30,6 +30,7 @@ from graspenv.surface.shapes import (
 
 __all__ = [
     "AA_EDGE_BIAS",
+    "TABLE_NOISE",
     "ContactShape",
     "FingerMotion",
     "Fingertip",

@@ -10,12 +10,12 @@ from graspenv.bench.grid import Cell, placed
 
 def test_a_noisy_grasp_is_mended_by_filling_flickering_dropouts(tmp_path: Path) -> None:
     cell = placed([Cell()], 0)[0]
-    clean = noise.measure(("clean", "speck filter", cell, 0))
+    clean = noise.measure(("clean", "speck filter", cell, 0, None, "default"))
     assert clean.ok and not clean.dropped
     # FTIR-like masks: its flickering dropouts cut the fingertips' edges and the box
     # lags the turn by degrees; filled from the last frame, the grasp holds.
-    raw = noise.measure(("ftir", "speck filter", cell, 0))
-    filled = noise.measure(("ftir", "filter + fill 2 px", cell, 0))
+    raw = noise.measure(("ftir", "speck filter", cell, 0, None, "default"))
+    filled = noise.measure(("ftir", "filter + fill 2 px", cell, 0, None, "default"))
     assert abs(raw.turn_error_deg) > noise.TURN_TARGET_DEG
     assert filled.ok, filled
     runs = [clean, raw, filled]

@@ -349,6 +349,18 @@ def _notched(surface: Surface, radius: float = 2.5) -> tuple[np.ndarray, np.ndar
     return mask, notched
 
 
+def test_clean_ups_read_any_non_zero_pixel_as_touched(surface: Surface) -> None:
+    _, notched = _notched(surface)
+    config = ContactConfig(close_px=5, fill_px=2)
+    areas = []
+    for value in (1, 7, 255):
+        tracker = ContactTracker(surface, config)
+        image = notched.astype(np.uint8) * np.uint8(value)
+        tracker.update(image)
+        areas.append(tracker.update(image).contacts[0].area)
+    assert areas[0] == areas[1] == areas[2]
+
+
 def test_closing_mends_a_crack_but_not_a_bite(surface: Surface) -> None:
     # A crack narrower than the kernel is filled; a bite the kernel fits inside (a
     # dropout cut into the edge, as wide as it is deep) is not.
@@ -376,11 +388,16 @@ def test_fill_mends_a_flickering_dropout_but_not_a_lifted_finger(surface: Surfac
     tracker = ContactTracker(surface, ContactConfig(fill_px=2))
     whole = tracker.update(mask).contacts[0].area
     assert tracker.update(notched).contacts[0].area == pytest.approx(whole)
-    # The finger lifts: nothing of it is kept, and no finger far from it is grown.
-    assert len(tracker.update(np.zeros_like(mask))) == 0
+    # The finger jumps 5 cm: nothing of where it was is kept (it is farther than
+    # fill_px from the new contact).
     moved = render_fingers(surface, [_finger(0.05, 0.0)])
-    area = tracker.update(moved).contacts[0].area
-    assert area == pytest.approx(ContactTracker(surface).update(moved).contacts[0].area)
+    frame = tracker.update(moved)
+    assert len(frame) == 1
+    assert frame.contacts[0].area == pytest.approx(
+        ContactTracker(surface).update(moved).contacts[0].area
+    )
+    # The finger lifts: nothing of it is kept.
+    assert len(tracker.update(np.zeros_like(mask))) == 0
     tracker.reset()  # forgets the last mask: a notched first frame stays notched
     cut = ContactTracker(surface).update(notched).contacts[0].area
     assert tracker.update(notched).contacts[0].area == pytest.approx(cut)

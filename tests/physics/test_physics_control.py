@@ -169,5 +169,12 @@ def test_a_light_scene_scales_the_table_press_but_not_the_press_on_an_object() -
     g = physics.gravity
     # The press (weight cancelled) as a velocity change: scaled beside the box, the
     # finger's whole 0.05 N on it (0.5 g particles: 2.5 N/kg against 100 N/kg).
-    assert v[0, 2] == pytest.approx((g - 0.05 * light.particle_scale / proxy.particle_mass) * h)
-    assert v[1, 2] == pytest.approx((g - 0.05 / proxy.particle_mass) * h)
+    press = light.proxy.down_force
+    assert v[0, 2] == pytest.approx((g - press * light.particle_scale / proxy.particle_mass) * h)
+    assert v[1, 2] == pytest.approx((g - press / proxy.particle_mass) * h)
+    # A scene of 200 g objects presses both the same, to the last bit.
+    default = load_config(None)
+    drive = ParticleDrive.for_frame(
+        start, start, 1, 1 / 60, 4, *default.particle_settings, top_press=default.proxy.down_force
+    )
+    assert drive.top_press_dv == drive.press_dv

@@ -129,6 +129,7 @@ AT_REFERENCE = [pytest.param(*p.values, id=p.id) for p in CASES]  # type: ignore
 def test_hard_case_keeps_the_invariants_at_the_reference_fidelity(
     build: Callable[[], Case],
 ) -> None:
-    # The preset's sub-steps and control time replace a case's own.
+    # The preset's sub-steps replace a case's own (the 1- and 16-sub-step cases run
+    # at its eight); a case's control time stays.
     case = build().with_sections(**FIDELITY_PRESETS["reference"])
     cases.run(case).assert_ok()

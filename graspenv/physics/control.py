@@ -146,16 +146,25 @@ class ParticleDrive:
             lift_dv=physics.gravity * h,
         )
 
+    def presses(self, rest_z: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Each bottom particle's press a sub-step (:attr:`press_dv` on the table,
+        :attr:`top_press_dv` on an object), m/s, from the resting heights (metres,
+        one per bottom particle, in row order); they change once a frame."""
+        on_object = rest_z > self.table_rest + REST_TOLERANCE
+        return np.where(on_object, self.top_press_dv, self.press_dv)
+
     def velocities(
         self,
         substep: int,
         position: NDArray[np.float64],
         velocity: NDArray[np.float64],
         rest_z: NDArray[np.float64],
+        press: NDArray[np.float64],
     ) -> NDArray[np.float64]:
         """The velocities to set before sub-step ``substep`` (1..S), m/s, (K·L, 3),
-        from the particles' positions and velocities now and the bottom particles'
-        resting heights (metres, one per bottom particle, in row order)."""
+        from the particles' positions and velocities now, the bottom particles'
+        resting heights (metres) and their presses (:meth:`presses`), one per bottom
+        particle in row order."""
         return drive_velocities(
             position,
             velocity,
@@ -171,9 +180,7 @@ class ParticleDrive:
             self.gain,
             self.v_max,
             self.dv_max,
-            self.press_dv,
-            self.top_press_dv,
-            self.table_rest,
+            press,
             self.lift_dv,
         )
 
@@ -194,9 +201,7 @@ def drive_velocities(
     gain: float,
     v_max: float,
     dv_max: float,
-    press_dv: float,
-    top_press_dv: float,
-    table_rest: float,
+    press_dv: NDArray[np.float64],
     lift_dv: float,
 ) -> NDArray[np.float64]:
     """One sub-step of the law (module docstring) for every particle: the velocity
@@ -222,8 +227,7 @@ def drive_velocities(
     upper = 0
     for i in range(n):
         if is_bottom[i]:
-            on_object = rest_z[bottom] > table_rest + REST_TOLERANCE
-            new[i, 2] += top_press_dv if on_object else press_dv
+            new[i, 2] += press_dv[bottom]
             # A bottom particle that rose above its support is pulled back.
             excess = position[i, 2] - rest_z[bottom] - REST_TOLERANCE
             if excess > 0.0:

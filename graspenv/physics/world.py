@@ -837,8 +837,10 @@ class PhysicsWorld:
                 x[drive.is_bottom][raised], clearance=SUPPORT_CLEARANCE * self.pool.radius
             )
 
+        press = drive.presses(rest_z)
+
         def drive_particles(substep: int) -> None:
-            velocity = drive.velocities(substep, x, v, rest_z)
+            velocity = drive.velocities(substep, x, v, rest_z, press)
             for body, linear, spin_of in zip(bodies, velocity.tolist(), angular, strict=True):
                 set_velocity(body, linear, spin_of, client)
 

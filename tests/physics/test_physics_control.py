@@ -165,7 +165,7 @@ def test_a_light_scene_scales_the_table_press_but_not_the_press_on_an_object() -
     h = 1 / 240
     position = np.array([[0.0, 0.0, r], [0.0, 0.0, 0.03 + r]])  # on the table, on the box
     rest_z = np.array([r, 0.03 + r])
-    v = drive.velocities(1, position, np.zeros((2, 3)), rest_z)
+    v = drive.velocities(1, position, np.zeros((2, 3)), rest_z, drive.presses(rest_z))
     g = physics.gravity
     # The press (weight cancelled) as a velocity change: scaled beside the box, the
     # finger's whole 0.05 N on it (0.5 g particles: 2.5 N/kg against 100 N/kg).

@@ -322,6 +322,16 @@ class PhysicsConfig:
     Attributes:
         substeps: physics steps per camera frame; the particle force law is recomputed
             on every one of them (Bullet's own ``numSubSteps`` would reapply a stale force).
+            A frame in which something moves fast gets more (``substep_travel``).
+        max_substeps: the most physics steps a fast frame gets; at ``substeps`` (or
+            below) every frame gets exactly ``substeps``.
+        substep_travel: the farthest an object's point or a particle may move in one
+            physics step, metres: a frame whose fastest point would move further
+            gets as many more steps as that needs, up to ``max_substeps``. Bullet's
+            box contacts tip and sink a turned box at longer steps, and a particle
+            moving further than this in a step ends deeper in what it meets
+            (docs/design.md, section 3b). The default is half the millimetre the
+            stability invariants let a particle into an object.
         solver_iterations: Bullet's constraint solver iterations.
         gravity: metres per second squared, pointing down.
         table_friction: the table's lateral friction coefficient.
@@ -351,6 +361,8 @@ class PhysicsConfig:
     """
 
     substeps: int = 4
+    max_substeps: int = 16
+    substep_travel: float = 0.0005
     solver_iterations: int = 50
     gravity: float = 9.81
     table_friction: float = 0.5
@@ -366,6 +378,8 @@ class PhysicsConfig:
 
     def __post_init__(self) -> None:
         _positive("physics.substeps", (self.substeps,))
+        _positive("physics.max_substeps", (self.max_substeps,))
+        _positive("physics.substep_travel", (self.substep_travel,))
         _positive("physics.control_time", (self.control_time,))
         _positive("physics.pool_batch", (self.pool_batch,))
         _positive("physics.solver_iterations", (self.solver_iterations,))
@@ -462,7 +476,9 @@ class SceneConfig:
 #: particle mass fixed it doubles the grip's stiffness and normal force, and the turn
 #: got worse (0.88° against 0.19°), so refining it does not converge.
 FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
-    "fast": {"physics": {"substeps": 2}, "contacts": {"spacing": 0.006}},
+    # Two sub-steps of up to 2 mm each: at 1 mm the canonical turn's frames already
+    # averaged three sub-steps, and fast would cost most of what default does.
+    "fast": {"physics": {"substeps": 2, "substep_travel": 0.002}, "contacts": {"spacing": 0.006}},
     "default": {},
     "reference": {
         "physics": {
@@ -478,10 +494,10 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 #: Each preset's measured error: the worst drift, millimetres, of the final object
 #: poses of the benchmark's scenarios against the reference preset, each the mean
 #: over three sub-pixel placements (``graspenv bench``, README "Speed against
-#: error"). Measured on 2026-12-02 against the reference in reduced coordinates; the
-#: worst scenario is the flick for both (``default``: 0.71 mm on the slide, 0.55 mm
-#: on the two-hand carry).
-PRESET_DRIFT_MM: dict[str, float] = {"fast": 22.98, "default": 1.07, "reference": 0.0}
+#: error"). Measured on 2026-12-03 with the sub-steps that follow the motion
+#: (``physics.substep_travel``); the worst scenario is the flick for ``fast`` and
+#: the slide for ``default`` (0.59 mm on the two-hand carry, 0.47 mm on the flick).
+PRESET_DRIFT_MM: dict[str, float] = {"fast": 20.70, "default": 0.78, "reference": 0.0}
 
 
 def choose_fidelity(error_budget_mm: float) -> str:

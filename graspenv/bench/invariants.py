@@ -39,8 +39,11 @@ worst value of every invariant (:class:`Worst`) and the frames that broke one
 4. **Particles outside objects.** No active particle overlaps an object by more than
    ``Tolerances.inside_object`` (1 mm, half the default particle radius): the
    overlap is the particle radius minus the exact signed distance from its centre
-   to the object's surface (box, sphere or upright cylinder in the object's
-   current pose). A firm squeeze presses particles 0.3–0.6 mm into a 0.2 kg box;
+   to the object's surface as Bullet has it (box, sphere or upright cylinder in
+   the object's current pose, a box's and a cylinder's edges rounded by Bullet's
+   1 mm collision margin, :data:`~graspenv.physics.EDGE_RADIUS`: a particle over an
+   edge of the sharp box is up to 0.73 mm nearer than over Bullet's). A firm
+   squeeze presses particles 0.3–0.6 mm into a 0.2 kg box;
    past half its radius a particle is on its way through the face (with its
    centre inside, the object can no longer push it back out).
 5. **No tunnelling through the table.** An object's centre stays at least its
@@ -71,6 +74,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ObjectConfig, ProxyConfig, SceneConfig
+from graspenv.physics import EDGE_RADIUS
 from graspenv.simulation import Simulation
 from graspenv.surface.hand import Hand
 
@@ -246,21 +250,28 @@ def _rotation(quaternion: NDArray[np.float64]) -> NDArray[np.float64]:
     )
 
 
-def _signed_distance(config: ObjectConfig, local: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Exact signed distance (metres, negative inside) of points in the object's frame."""
+def _signed_distance(
+    config: ObjectConfig, local: NDArray[np.float64], edge_radius: float = 0.0
+) -> NDArray[np.float64]:
+    """Exact signed distance (metres, negative inside) of points in the object's frame;
+    a box's and a cylinder's edges rounded by ``edge_radius`` (the shape shrunk by it,
+    then grown by it again: the faces stay where they are)."""
     if config.shape == "sphere":
         result: NDArray[np.float64] = np.linalg.norm(local, axis=1) - config.size[0]
         return result
     if config.shape == "box":
-        q = np.abs(local) - 0.5 * np.asarray(config.size)
+        q = np.abs(local) - (0.5 * np.asarray(config.size) - edge_radius)
     else:
         radius, height = config.size
         q = np.column_stack(
-            [np.hypot(local[:, 0], local[:, 1]) - radius, np.abs(local[:, 2]) - 0.5 * height]
+            [
+                np.hypot(local[:, 0], local[:, 1]) - (radius - edge_radius),
+                np.abs(local[:, 2]) - (0.5 * height - edge_radius),
+            ]
         )
     outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
     inside = np.minimum(q.max(axis=1), 0.0)
-    result = outside + inside
+    result = outside + inside - edge_radius
     return result
 
 
@@ -270,6 +281,7 @@ def object_penetration(
     quaternion: NDArray[np.float64],
     centres: NDArray[np.float64],
     radius: float,
+    edge_radius: float = 0.0,
 ) -> NDArray[np.float64]:
     """How far each sphere overlaps an object.
 
@@ -279,13 +291,15 @@ def object_penetration(
         quaternion: its orientation (x, y, z, w), (4,).
         centres: sphere centres, metres, world frame, (N, 3).
         radius: sphere radius, metres.
+        edge_radius: how far a box's or cylinder's edges are rounded, metres (the
+            checker passes Bullet's, :data:`~graspenv.physics.EDGE_RADIUS`).
 
     Returns:
         radius minus the signed distance from each centre to the object's surface,
         metres, (N,): positive where the sphere overlaps the object.
     """
     local = (np.asarray(centres, dtype=float) - position) @ _rotation(quaternion)
-    return radius - _signed_distance(config, local)
+    return radius - _signed_distance(config, local, edge_radius)
 
 
 def first_difference(a: NDArray[np.float64], b: NDArray[np.float64]) -> str | None:
@@ -489,7 +503,7 @@ class InvariantChecker:
     ) -> None:
         config = state.obj.config
         overlap = object_penetration(
-            config, state.position, state.quaternion, positions, self._radius
+            config, state.position, state.quaternion, positions, self._radius, EDGE_RADIUS
         )
         deepest = int(np.argmax(overlap))
         depth = float(overlap[deepest])

@@ -26,9 +26,16 @@ Between episodes ``world.reset()`` puts the same scene back and
 from __future__ import annotations
 
 from graspenv.physics.pool import OBJECT_GROUP, PARTICLE_GROUP, STATIC_GROUP, ParticlePool
-from graspenv.physics.world import ContactReport, FootprintHits, PhysicsWorld, RayHits
+from graspenv.physics.world import (
+    EDGE_RADIUS,
+    ContactReport,
+    FootprintHits,
+    PhysicsWorld,
+    RayHits,
+)
 
 __all__ = [
+    "EDGE_RADIUS",
     "OBJECT_GROUP",
     "PARTICLE_GROUP",
     "STATIC_GROUP",

@@ -35,6 +35,7 @@ of each sub-step is one call of :func:`drive_velocities`.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -43,11 +44,28 @@ from numpy.typing import NDArray
 from graspenv.config import PhysicsConfig, ProxyConfig
 from graspenv.jit import njit
 
-__all__ = ["REST_TOLERANCE", "ParticleDrive", "drive_velocities"]
+__all__ = ["REST_TOLERANCE", "ParticleDrive", "drive_velocities", "frame_substeps"]
 
 #: A bottom particle may sit this far above its support before it is pulled down,
 #: metres (Bullet's resting contacts sink about 0.01-0.03 mm, never rise).
 REST_TOLERANCE = 2e-4
+
+
+def frame_substeps(travel: float, physics: PhysicsConfig) -> int:
+    """The sub-steps of a frame in which the fastest point of an object or particle
+    moves ``travel`` metres: ``physics.substeps``, raised so that no point moves more
+    than ``physics.substep_travel`` in one sub-step, up to ``physics.max_substeps``.
+
+    A box turned on the table at one 1/60 s step a frame tips onto a corner and sinks
+    into the table, and so does a box spun by a bare torque with no particle near
+    (docs/design.md, section 3b): Bullet's box-on-box contact needs short steps once
+    the corners move millimetres a step. Slow frames keep the configured count.
+    """
+    base = physics.substeps
+    most = max(base, physics.max_substeps)
+    if most == base or travel <= base * physics.substep_travel:
+        return base
+    return min(most, math.ceil(travel / physics.substep_travel))
 
 
 @dataclass(frozen=True)
@@ -103,13 +121,17 @@ class ParticleDrive:
         proxy: ProxyConfig,
         physics: PhysicsConfig,
         top_press: float,
+        control_dt: float | None = None,
     ) -> ParticleDrive:
         """The law for a frame in which particles go from ``start`` to ``goal``
         (metres, (K·L, 2), stacks of ``layers`` bottom first), pressed by
         ``proxy.down_force`` on the table and by ``top_press`` (newtons) on an
-        object."""
+        object, in ``substeps`` sub-steps. ``control_dt`` is the law's Δt (default:
+        ``physics.control_time``, or the sub-step if longer); a frame given more
+        sub-steps than configured (:func:`frame_substeps`) keeps the configured
+        law's Δt, so it resolves the same law more finely."""
         h = frame_dt / substeps
-        tau = max(physics.control_time, h)
+        tau = max(physics.control_time, h) if control_dt is None else max(control_dt, h)
         mass = proxy.particle_mass
         step = goal - start
         k = len(goal) // layers

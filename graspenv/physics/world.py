@@ -12,6 +12,9 @@ Settings applied (from ``scene.physics`` unless stated), and why:
 - time step ``1 / (surface.fps · physics.substeps)``, sub-stepped in Python: the
   particle force is recomputed before every ``stepSimulation``. Bullet's own
   ``numSubSteps`` would reapply the first sub-step's force on every internal step.
+  A frame in which an object's point or a particle would move more than
+  ``physics.substep_travel`` a step gets more, shorter steps (up to
+  ``physics.max_substeps``; :func:`~graspenv.physics.control.frame_substeps`).
 - ``deterministicOverlappingPairs``: Bullet sorts its broadphase pairs, so the
   solver order, and with it every bit of the result, depends only on the commands.
 - ``numSolverIterations`` from ``physics.solver_iterations``; ``allowedCcdPenetration``
@@ -48,7 +51,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from graspenv.config import ObjectConfig, SceneConfig
 from graspenv.geometry import SHAPE_CODES, footprint_depths
-from graspenv.physics.control import REST_TOLERANCE, ParticleDrive
+from graspenv.physics.control import REST_TOLERANCE, ParticleDrive, frame_substeps
 from graspenv.physics.pool import (
     OBJECT_GROUP,
     PARTICLE_GROUP,
@@ -58,11 +61,24 @@ from graspenv.physics.pool import (
 from graspenv.physics.rigid import RigidBodies
 from graspenv.physics.view import FLOOR_RGBA, TABLE_RGBA, object_rgba, render_rgb
 
-__all__ = ["ContactReport", "FootprintHits", "ObjectStates", "PhysicsWorld", "RayHits"]
+__all__ = [
+    "EDGE_RADIUS",
+    "ContactReport",
+    "FootprintHits",
+    "ObjectStates",
+    "PhysicsWorld",
+    "RayHits",
+]
 
 #: Half the thickness of the foot under an upright cylinder, metres (its collision
 #: shape, ``_cylinder_collision_shape``).
 FOOT_HALF_THICKNESS = 0.001
+#: How far Bullet rounds a box's and a cylinder's edges and corners, metres: its
+#: collision margin (1 mm for shapes made by ``createCollisionShape``), embedded in
+#: the half extents, so the faces are where the size says and the edges are
+#: rounded by it (a sphere at a box's corner is 0.73 mm farther from it than from
+#: the sharp corner; ``tests/physics/test_physics_world.py`` measures it).
+EDGE_RADIUS = 0.001
 #: Thickness of the table slab under z = 0, metres.
 TABLE_THICKNESS = 0.05
 #: Height of the floor's top below the table top, metres (a table is about this high).
@@ -213,8 +229,9 @@ class PhysicsWorld:
         scene: the configuration it was built from (or last rebuilt to).
         pool: the particle bodies; ids from it go to :meth:`step_frame`.
         frame_dt: seconds per camera frame, ``1 / surface.fps``.
-        substeps: physics steps per frame.
-        substep_dt: seconds per physics step.
+        substeps: physics steps per frame (a fast frame gets more, see
+            :attr:`last_substeps`).
+        substep_dt: seconds per physics step at ``substeps``.
         control_dt: Δt of the particle control law, seconds (``physics.control_time``,
             or the sub-step if that is longer).
 
@@ -268,6 +285,8 @@ class PhysicsWorld:
         self._place_objects()
         self.bullet_seconds = 0.0
         """Wall seconds spent inside Bullet's ``stepSimulation`` by the last frame."""
+        self.last_substeps = self.substeps
+        """Physics steps the last frame took (``physics.substeps`` or more)."""
 
     # -- lifetime --------------------------------------------------------------------
 
@@ -788,41 +807,20 @@ class PhysicsWorld:
             raise ValueError(f"targets must have shape ({k}, 2), got {goal_xy.shape}")
         spin_z = np.broadcast_to(np.asarray(spin, dtype=float), (k,))
         frame_dt = self.frame_dt if dt is None else float(dt)
-        h = frame_dt / self.substeps
         flat = ids.reshape(-1)
         if not self.pool.is_active(flat).all():
             raise ValueError(
                 f"step_frame got parked or unknown particles: {flat[~self.pool.is_active(flat)]}"
             )
         if flat.size == 0:
-            self._substeps(h)
+            self._substeps(frame_dt, self._frame_substeps(frame_dt))
             return np.zeros((*np.shape(particles), 3))
 
         goal = np.repeat(goal_xy, layers, axis=0)
-        drive = ParticleDrive.for_frame(
-            self.pool.last_targets(flat),
-            goal,
-            layers,
-            frame_dt,
-            self.substeps,
-            self._particle_proxy,
-            self._particle_physics,
-            top_press=self.scene.proxy.down_force,
-        )
-        angular = [(0.0, 0.0, w) for w in np.repeat(spin_z, layers).tolist()]
-        self.pool.set_upper(flat, ~drive.is_bottom)
+        start = self.pool.last_targets(flat)
         bodies = self.pool.body_ids(flat).tolist()
-        n = len(bodies)
         client = self.client
         get_position = pb.getBasePositionAndOrientation
-        set_velocity = pb.resetBaseVelocity
-        chain = itertools.chain.from_iterable
-
-        def read_positions() -> NDArray[np.float64]:
-            # Positional arguments and fromiter: this is the hot loop.
-            rows = [get_position(b, client)[0] for b in bodies]
-            return np.fromiter(chain(rows), float, 3 * n).reshape(n, 3)
-
         # Velocities: Bullet moves a body by h·v after its solve (pybullet splits
         # impulses only past 4 cm of penetration), so a particle's velocity is its
         # last displacement over h, exact to rounding; only the first sub-step
@@ -832,6 +830,38 @@ class PhysicsWorld:
         for i in np.flatnonzero(~known).tolist():
             x[i] = get_position(bodies[i], client)[0]
             v[i] = pb.getBaseVelocity(bodies[i], client)[0]
+        # The farthest a particle goes this frame: its target's step, or its own
+        # speed for the frame if that is more.
+        particle_travel = math.sqrt(
+            max(
+                float(np.max(np.sum((goal - start) ** 2, axis=1))),
+                float(np.max(np.sum(v**2, axis=1))) * frame_dt**2,
+            )
+        )
+        substeps = self._frame_substeps(frame_dt, particle_travel)
+        h = frame_dt / substeps
+        drive = ParticleDrive.for_frame(
+            start,
+            goal,
+            layers,
+            frame_dt,
+            substeps,
+            self._particle_proxy,
+            self._particle_physics,
+            top_press=self.scene.proxy.down_force,
+            control_dt=self._control_dt(frame_dt),
+        )
+        angular = [(0.0, 0.0, w) for w in np.repeat(spin_z, layers).tolist()]
+        self.pool.set_upper(flat, ~drive.is_bottom)
+        n = len(bodies)
+        set_velocity = pb.resetBaseVelocity
+        chain = itertools.chain.from_iterable
+
+        def read_positions() -> NDArray[np.float64]:
+            # Positional arguments and fromiter: this is the hot loop.
+            rows = [get_position(b, client)[0] for b in bodies]
+            return np.fromiter(chain(rows), float, 3 * n).reshape(n, 3)
+
         # Where each bottom particle should rest: on the surface under it (rays from
         # the particle down ignore whatever is above it). One at table level cannot
         # be above its support and needs no ray.
@@ -856,7 +886,7 @@ class PhysicsWorld:
             v = (moved - x) / h
             x = moved
 
-        self._substeps(h, drive_particles, observe)
+        self._substeps(frame_dt, substeps, drive_particles, observe)
         self.pool.record_states(flat, x, v)
         self.pool.set_last_targets(flat, goal)
         return x.reshape(*np.shape(particles), 3)
@@ -871,26 +901,66 @@ class PhysicsWorld:
             dt: frame duration, seconds; defaults to ``1 / surface.fps``.
         """
         frame_dt = self.frame_dt if dt is None else float(dt)
-        h = frame_dt / self.substeps
-        tau = max(self.scene.physics.control_time, h)
-        self._substeps(h, lambda _: self.rigid_proxies.drive(handles, goals, h, tau))
+        substeps = self._frame_substeps(frame_dt)
+        h = frame_dt / substeps
+        tau = max(self._control_dt(frame_dt), h)
+        self._substeps(
+            frame_dt, substeps, lambda _: self.rigid_proxies.drive(handles, goals, h, tau)
+        )
+
+    def _control_dt(self, frame_dt: float) -> float:
+        """The control law's Δt for a frame of ``frame_dt`` seconds: the configured
+        ``physics.control_time``, or the configured sub-step if that is longer."""
+        return max(self.scene.physics.control_time, frame_dt / self.substeps)
+
+    def _frame_substeps(self, frame_dt: float, particle_travel: float = 0.0) -> int:
+        """This frame's sub-steps (:func:`~graspenv.physics.control.frame_substeps`)
+        from the particles' farthest travel (metres) and the objects' speed and spin
+        at the frame's start: a box's or cylinder's fastest point (the spin at its
+        bounding radius), a ball's lowest point (a ball rolling on the table needs no
+        short steps: the point it rests on is still)."""
+        physics = self.scene.physics
+        if physics.max_substeps <= self.substeps:
+            return self.substeps
+        travel = particle_travel
+        if self._object_bodies:
+            states = self.object_states()
+            spin = states.angular
+            # A ball's lowest point moves at v + ω × (0, 0, −r).
+            lowest = (
+                states.linear
+                + np.column_stack([-spin[:, 1], spin[:, 0], np.zeros(len(spin))])
+                * self._bounding_radii[:, None]
+            )
+            speed = np.where(
+                self._shape_codes == SHAPE_CODES["sphere"],
+                np.sqrt(np.sum(lowest**2, axis=1)),
+                np.sqrt(np.sum(states.linear**2, axis=1))
+                + self._bounding_radii * np.sqrt(np.sum(spin**2, axis=1)),
+            )
+            travel = max(travel, float(np.max(speed)) * frame_dt)
+        return frame_substeps(travel, physics)
 
     def _substeps(
         self,
-        h: float,
+        frame_dt: float,
+        substeps: int,
         drive: Callable[[int], None] | None = None,
         observe: Callable[[], None] | None = None,
     ) -> None:
-        """The frame's physics sub-steps of ``h`` seconds: for each s = 1..S, drive
-        the proxies, push the objects, step Bullet, then observe. Pending forces are
-        dropped afterwards; :attr:`bullet_seconds` gets the time in Bullet's step."""
+        """The frame's ``substeps`` physics sub-steps of ``frame_dt / substeps``
+        seconds: for each s = 1..S, drive the proxies, push the objects, step Bullet,
+        then observe. Pending forces are dropped afterwards; :attr:`bullet_seconds`
+        gets the time in Bullet's step and :attr:`last_substeps` the count."""
         client = self.client
+        h = frame_dt / substeps
         if h != self.substep_dt:
             pb.setTimeStep(h, physicsClientId=client)
         clock = time.perf_counter
         step = pb.stepSimulation
         bullet = 0.0
-        for s in range(1, self.substeps + 1):
+        self.last_substeps = substeps
+        for s in range(1, substeps + 1):
             if drive is not None:
                 drive(s)
             self._apply_pending_forces()
@@ -1018,6 +1088,8 @@ class PhysicsWorld:
         self._sizes = np.zeros((len(self.scene.objects), 3))
         for i, o in enumerate(self.scene.objects):
             self._sizes[i, : len(o.size)] = o.size
+        # The farthest point of each object from its centre, metres.
+        self._bounding_radii = np.array([_bounding_radius(o) for o in self.scene.objects])
 
     def _static_box(
         self,
@@ -1129,6 +1201,16 @@ class PhysicsWorld:
             _, high = pb.getAABB(body, physicsClientId=self.client)
             tops.append(high[2])
         return max(tops) + _RAY_CLEARANCE
+
+
+def _bounding_radius(config: ObjectConfig) -> float:
+    """The distance from an object's centre to its farthest point, metres."""
+    if config.shape == "box":
+        return 0.5 * math.sqrt(sum(s * s for s in config.size))
+    if config.shape == "sphere":
+        return config.size[0]
+    radius, height = config.size
+    return math.hypot(radius, 0.5 * height)
 
 
 def _cylinder_collision_shape(client: int, radius: float, height: float) -> int:

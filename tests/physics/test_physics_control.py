@@ -178,3 +178,17 @@ def test_a_light_scene_scales_the_table_press_but_not_the_press_on_an_object() -
         start, start, 1, 1 / 60, 4, *default.particle_settings, top_press=default.proxy.down_force
     )
     assert drive.top_press_dv == drive.press_dv
+
+
+def test_a_frame_gets_the_sub_steps_its_fastest_point_needs() -> None:
+    from graspenv.config import PhysicsConfig
+    from graspenv.physics.control import frame_substeps
+
+    physics = PhysicsConfig(substeps=4, max_substeps=16, substep_travel=0.001)
+    assert frame_substeps(0.0, physics) == 4
+    assert frame_substeps(0.004, physics) == 4  # 1 mm a sub-step at four
+    assert frame_substeps(0.0041, physics) == 5
+    assert frame_substeps(0.0105, physics) == 11
+    assert frame_substeps(1.0, physics) == 16  # capped
+    fixed = PhysicsConfig(substeps=4, max_substeps=2)
+    assert frame_substeps(1.0, fixed) == 4  # at or below substeps: a fixed count

@@ -169,11 +169,11 @@ def test_rebuilds_do_not_grow_memory() -> None:
             r = world.pool.radius
             reach = obj.size[0] / 2 + r if obj.shape == "box" else 2 * math.sqrt(obj.size[0] * r)
             ids = world.pool.acquire(12)
-            xy = _ring((0.0, 0.0), reach + 0.01, 12)
+            xy = _ring((0.0, 0.0), reach + 0.002, 12)
             world.pool.place(ids, np.column_stack([xy, np.full(12, world.pool.radius)]))
             world.apply_force(obj.name, [0.1, 0.0, 0.0])
             for _ in range(2):
-                world.step_frame(ids, xy * (reach - 0.001) / (reach + 0.01))
+                world.step_frame(ids, xy * (reach - 0.001) / (reach + 0.002))
             assert np.any(world.contact_report(obj.name).particle >= 0)
         growth = _resident_mb() - before
     # Measured: 0.0 MB (before PyBullet's mesh reference leak was worked around, the

@@ -146,10 +146,14 @@ def _polygon_depth(polygon: np.ndarray, points: np.ndarray) -> np.ndarray:
 def test_particles_collide_with_table_and_box_not_each_other(world: PhysicsWorld) -> None:
     r = world.scene.proxy.particle_radius
     ids = world.pool.acquire(3)
-    # two particles overlapping each other, one driven into the box's +x face
-    world.pool.place(ids, [[0.1, 0.1, r], [0.1 + r, 0.1, r], [0.05, 0.0, r]])
+    # two particles overlapping each other, and one placed 2 mm off the box's +x face
+    # and driven 0.5 mm into it (1152 N/m · 0.5 mm is less than the 0.98 N of table
+    # friction that holds the box; from farther in one frame it would strike the box
+    # and kick it away)
+    face = world.scene.objects[0].size[0] / 2
+    world.pool.place(ids, [[0.1, 0.1, r], [0.1 + r, 0.1, r], [face + r + 0.002, 0.0, r]])
     for _ in range(20):
-        end = world.step_frame(ids, [[0.1, 0.1], [0.1 + r, 0.1], [0.031, 0.0]])
+        end = world.step_frame(ids, [[0.1, 0.1], [0.1 + r, 0.1], [face + r - 0.0005, 0.0]])
     # the overlapping pair stays overlapped: no particle-particle contact
     np.testing.assert_allclose(end[:2, :2], [[0.1, 0.1], [0.1 + r, 0.1]], atol=1e-6)
     # all rest on the table, not in it
@@ -352,3 +356,78 @@ def test_a_push_at_a_height_adds_the_torque_of_its_offset(world: PhysicsWorld) -
     np.testing.assert_allclose(linear[1], 2.0 / mass / 60.0, rtol=1e-6)
     with pytest.raises(ValueError, match="height"):
         world.apply_force("box", (1.0, 0.0, 0.0), height=float("nan"))
+
+
+@pytest.mark.parametrize("spin", [4.0, 16.0])
+def test_a_spinning_box_stays_on_the_table_at_one_step_a_frame(
+    make_world: Callable[..., PhysicsWorld], spin: float
+) -> None:
+    """Bullet tips a box spinning on a slippery table onto a corner and sinks it when
+    a step is a whole 1/60 s frame (2.3 mm at 4 rad/s, 6.7 mm at 16, no particle
+    near); the frames whose corners move more than ``physics.substep_travel`` get
+    more steps, and it stays on the table (0.2 mm at most)."""
+
+    def deepest(max_substeps: int) -> tuple[float, int]:
+        physics = {"substeps": 1, "max_substeps": max_substeps, "table_friction": 0.1}
+        world = make_world(physics=physics)
+        world.set_object_state("box", angular_velocity=[0.0, 0.0, spin])
+        lowest, steps = math.inf, 0
+        for _ in range(120):
+            world.step_frame([], np.zeros((0, 2)))
+            lowest = min(lowest, world.object_pose("box")[0][2])
+            steps += world.last_substeps
+        return BOX_HEIGHT / 2 - lowest, steps
+
+    fixed, fixed_steps = deepest(1)
+    adaptive, steps = deepest(16)
+    assert fixed > 0.002
+    assert fixed_steps == 120
+    assert adaptive < 3e-4
+    assert 120 < steps < 120 * 16 / 2  # only the fast frames get more
+
+
+def test_the_invariants_measure_a_particle_against_the_shape_bullet_has(
+    make_world: Callable[..., PhysicsWorld],
+) -> None:
+    """Bullet rounds a box's and a cylinder's edges by EDGE_RADIUS: a particle over an
+    edge or a corner is as far from the object as Bullet finds it, not as far as from
+    the sharp shape (0.41 and 0.73 mm nearer at a touch), and over a face the two
+    agree."""
+    from graspenv.bench.invariants import object_penetration
+    from graspenv.physics import EDGE_RADIUS
+
+    objects = [
+        {"name": "box", "shape": "box", "size": [0.06, 0.06, 0.03]},
+        {"name": "can", "shape": "cylinder", "size": [0.03, 0.04], "position": [0.12, 0.0]},
+    ]
+    world = make_world(objects=objects)
+    r = world.pool.radius
+    particle = world.pool.acquire(1)
+    body = int(world.pool.body_ids(particle)[0])
+    unit = np.array([1.0, 1.0, 1.0]) / math.sqrt(3.0)
+    # (object, a point of its sharp surface, the outward direction), in world frame
+    probes = [
+        ("box", [0.03, 0.0, 0.015], [1.0, 0.0, 0.0]),  # a face
+        ("box", [0.03, 0.03, 0.015], [math.sqrt(0.5), math.sqrt(0.5), 0.0]),  # an edge
+        ("box", [0.03, 0.03, 0.03], unit),  # a corner
+        ("can", [0.15, 0.0, 0.04], [math.sqrt(0.5), 0.0, math.sqrt(0.5)]),  # the top rim
+    ]
+    for name, surface, outward in probes:
+        config = next(o for o in world.scene.objects if o.name == name)
+        index = world.object_index(name)
+        position, quaternion = world.object_pose(name)
+        for gap in (0.0005, -0.0005):  # the sphere's surface this far off the sharp one
+            centre = np.asarray(surface) + (r + gap) * np.asarray(outward)
+            pb.resetBasePositionAndOrientation(
+                body, centre.tolist(), [0, 0, 0, 1], physicsClientId=world.client
+            )
+            closest = pb.getClosestPoints(
+                body, world._object_bodies[index], 0.01, physicsClientId=world.client
+            )
+            bullet = min(c[8] for c in closest)
+            measured = object_penetration(
+                config, position, quaternion, centre[None], r, EDGE_RADIUS
+            )
+            assert -measured[0] == pytest.approx(bullet, abs=5e-5), (name, surface, gap)
+        sharp = object_penetration(config, position, quaternion, centre[None], r)[0]
+        assert sharp >= measured[0]

@@ -830,15 +830,7 @@ class PhysicsWorld:
         for i in np.flatnonzero(~known).tolist():
             x[i] = get_position(bodies[i], client)[0]
             v[i] = pb.getBaseVelocity(bodies[i], client)[0]
-        # The farthest a particle goes this frame: its target's step, or its own
-        # speed for the frame if that is more.
-        particle_travel = math.sqrt(
-            max(
-                float(np.max(np.sum((goal - start) ** 2, axis=1))),
-                float(np.max(np.sum(v**2, axis=1))) * frame_dt**2,
-            )
-        )
-        substeps = self._frame_substeps(frame_dt, particle_travel)
+        substeps = self._frame_substeps(frame_dt, goal - start, v)
         h = frame_dt / substeps
         drive = ParticleDrive.for_frame(
             start,
@@ -913,16 +905,29 @@ class PhysicsWorld:
         ``physics.control_time``, or the configured sub-step if that is longer."""
         return max(self.scene.physics.control_time, frame_dt / self.substeps)
 
-    def _frame_substeps(self, frame_dt: float, particle_travel: float = 0.0) -> int:
+    def _frame_substeps(
+        self,
+        frame_dt: float,
+        target_steps: NDArray[np.float64] | None = None,
+        velocities: NDArray[np.float64] | None = None,
+    ) -> int:
         """This frame's sub-steps (:func:`~graspenv.physics.control.frame_substeps`)
-        from the particles' farthest travel (metres) and the objects' speed and spin
-        at the frame's start: a box's or cylinder's fastest point (the spin at its
-        bounding radius), a ball's lowest point (a ball rolling on the table needs no
-        short steps: the point it rests on is still)."""
+        from how far its particles go (each its target's step, metres, (n, 2), or
+        its own speed, m/s, (n, 3), over the frame, whichever is more) and from the
+        objects' speed and spin at the frame's start: a box's or cylinder's fastest
+        point (the spin at its bounding radius), a ball's lowest point (a ball
+        rolling on the table needs no short steps: the point it rests on is still)."""
         physics = self.scene.physics
         if physics.max_substeps <= self.substeps:
-            return self.substeps
-        travel = particle_travel
+            return self.substeps  # a fixed count: nothing to measure
+        travel = 0.0
+        if target_steps is not None and velocities is not None:
+            travel = math.sqrt(
+                max(
+                    float(np.max(np.sum(target_steps**2, axis=1))),
+                    float(np.max(np.sum(velocities**2, axis=1))) * frame_dt**2,
+                )
+            )
         if self._object_bodies:
             states = self.object_states()
             spin = states.angular

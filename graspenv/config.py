@@ -267,6 +267,14 @@ class ProxyConfig:
             contacts' centroids and apply it to previous points before matching.
         predicted_resampling: resample a continuing contour starting from the
             predicted previous points, so points do not jitter along the contour.
+        smoothing: gain of an alpha-beta filter on each followed contour point (1 =
+            off, the points as the contour gives them): a point moves this share of
+            the way from where its own velocity predicts it to where it is seen. For
+            a noisy table, whose edges wobble by a pixel a frame (docs/design.md,
+            section 3b); a steady motion is followed without lag.
+        smoothing_gate: a contact whose centroid lands further than this from
+            where the filter expects it, metres, is taken as seen (a strike or a
+            sudden start is motion, not noise).
         instant_stride: pixel subsample of the instant method's gradient pixels.
         rigid_height: height of the rigid method's contact bodies, metres.
     """
@@ -290,6 +298,8 @@ class ProxyConfig:
     rigid_height: float = 0.01
     track_hand_rotation: bool = True
     predicted_resampling: bool = True
+    smoothing: float = 1.0
+    smoothing_gate: float = 0.003
     instant_stride: int = 2
 
     def __post_init__(self) -> None:
@@ -313,6 +323,10 @@ class ProxyConfig:
             raise ConfigError(
                 f"proxy.penetration_margin must be >= 0, got {self.penetration_margin}"
             )
+        if not 0.0 < self.smoothing <= 1.0:
+            raise ConfigError(f"proxy.smoothing must be in (0, 1], got {self.smoothing}")
+        if not self.smoothing_gate > 0:
+            raise ConfigError(f"proxy.smoothing_gate must be > 0, got {self.smoothing_gate}")
 
 
 @dataclass(frozen=True)

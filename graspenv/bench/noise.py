@@ -6,7 +6,8 @@ masks seen through each noise level of :data:`LEVELS` (the two kinds of table of
 with each clean-up of :data:`CLEANUPS` in the contact pipeline: nothing, the
 smallest-contact filter (``contacts.min_area``, on by default), and the filter with
 a morphological closing (``contacts.close_px``), a fill of flickering dropouts from
-the previous frame (``contacts.fill_px``) or both. Each run is played with two noise
+the previous frame (``contacts.fill_px``) or both, and both with the proxies'
+smoothing of followed contours (``proxy.smoothing``). Each run is played with two noise
 seeds at a sub-pixel placement of its own.
 
 Ground truth is the ideal rigid grasp: the object turns with the fingers and ends
@@ -70,13 +71,18 @@ LEVELS: dict[str, SensorNoise | None] = {
     "di x4": TABLE_NOISE["di"].scaled(4.0),
 }
 
-#: The contact pipeline's clean-ups: contacts-section overrides.
-CLEANUPS: dict[str, dict[str, Any]] = {
-    "none": {"min_area": 0.0},
+#: The clean-ups: the contact pipeline's (contacts-section overrides) and the
+#: proxies' smoothing of followed contours (proxy section), as scene sections.
+CLEANUPS: dict[str, dict[str, dict[str, Any]]] = {
+    "none": {"contacts": {"min_area": 0.0}},
     "speck filter": {},
-    "filter + close 5 px": {"close_px": 5},
-    "filter + fill 2 px": {"fill_px": 2},
-    "filter + close 5 + fill 2": {"close_px": 5, "fill_px": 2},
+    "filter + close 5 px": {"contacts": {"close_px": 5}},
+    "filter + fill 2 px": {"contacts": {"fill_px": 2}},
+    "filter + close 5 + fill 2": {"contacts": {"close_px": 5, "fill_px": 2}},
+    "close 5 + fill 2 + smoothing 0.5": {
+        "contacts": {"close_px": 5, "fill_px": 2},
+        "proxy": {"smoothing": 0.5},
+    },
 }
 
 #: The objects: the canonical box and the grid's hard corners of it (light, small,
@@ -144,7 +150,7 @@ def _jobs(cells: Sequence[Cell], config: str | None, preset: str) -> list[Job]:
 def measure(job: Job) -> NoiseRun:
     """Play one job's turn and slide (module docstring)."""
     level, cleanup, cell, seed, config, preset = job
-    base = base_scene(config, preset).replace(contacts=CLEANUPS[cleanup])
+    base = base_scene(config, preset).replace(**CLEANUPS[cleanup])
     noise = LEVELS[level]
     _, turned, _, _ = grasp_run(base, cell, "turn", noise, seed)
     final, _, _, _ = grasp_run(base, cell, "slide", noise, seed)

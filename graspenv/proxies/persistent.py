@@ -73,6 +73,10 @@ class _Tracks:
         travel: how far any point of each contact moved in the last frame at most,
             metres, shape (T,).
         born: which points got their particle in the last frame, shape (P,).
+        smoothed: each contact's filtered centroid, metres, (T, 2) (the centroid
+            itself unless ``proxy.smoothing`` is on).
+        drift: each contact's filtered centroid velocity, metres a frame, (T, 2);
+            NaN in a contact's first frame.
     """
 
     ids: NDArray[np.int64]
@@ -82,12 +86,15 @@ class _Tracks:
     centroids: NDArray[np.float64]
     travel: NDArray[np.float64]
     born: NDArray[np.bool_]
+    smoothed: NDArray[np.float64]
+    drift: NDArray[np.float64]
 
     @classmethod
     def empty(cls, layers: int) -> _Tracks:
         return cls(
             np.zeros(0, np.int64), np.zeros(1, np.intp), np.zeros((0, 2)),
             np.zeros((0, layers), np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros(0, bool),
+            np.zeros((0, 2)), np.zeros((0, 2)),
         )  # fmt: skip
 
 
@@ -232,9 +239,24 @@ class PersistentProxies:
             self._put_down(ids, plan.current[lost])
             particles[lost] = ids
             born[lost] = True
+        points, smoothed, drift = plan.current, plan.centroids, np.zeros_like(plan.centroids)
+        if proxy.smoothing < 1.0:
+            rows = plan.track_rows
+            smoothed, drift = _alpha_beta(
+                before.smoothed[rows],
+                before.drift[rows],
+                plan.centroids,
+                proxy.smoothing,
+                proxy.smoothing_gate,
+            )
+            turn = rotation_kernel(before.smoothed[rows], smoothed)
+            points = _smooth_points(
+                before.points[plan.previous_rows], plan.previous_bounds, before.smoothed[rows],
+                smoothed, turn, plan.current, match.predecessor, proxy.smoothing,
+            )  # fmt: skip
         return _Tracks(
-            plan.ids, plan.current_bounds, plan.current, particles, plan.centroids,
-            plan.travel, born,
+            plan.ids, plan.current_bounds, points, particles, plan.centroids,
+            plan.travel, born, smoothed, drift,
         )  # fmt: skip
 
     def _touch_down(
@@ -259,6 +281,7 @@ class PersistentProxies:
             return _Tracks(
                 frame.contact_ids[new], bounds, points, particles,
                 frame.centroids[new].copy(), np.zeros(new.size), born,
+                frame.centroids[new].copy(), np.full((new.size, 2), np.nan),
             )  # fmt: skip
         # Both kinds together, then in the frame's (ascending id) order.
         both_bounds = bounds_of(np.concatenate([np.diff(followed.bounds), np.diff(bounds)]))
@@ -274,6 +297,8 @@ class PersistentProxies:
             frame.centroids.copy(),
             np.concatenate([followed.travel, np.zeros(new.size)])[order],
             gather(np.concatenate([followed.born, born]), both_bounds, order)[0],
+            np.concatenate([followed.smoothed, frame.centroids[new]])[order],
+            np.concatenate([followed.drift, np.full((new.size, 2), np.nan)])[order],
         )
 
     def _release(self, particles: NDArray[np.int64]) -> None:
@@ -365,6 +390,7 @@ class _Plan:
         contacts: the following contacts (frame indices), (F,).
         ids: their ids, (F,).
         centroids: their centroids now, metres, (F, 2).
+        track_rows: the tracks they continue, (F,).
         previous_rows: the rows of their tracks' last points, (P,).
         previous_bounds: those points' bounds per contact, (F + 1,).
         predicted: where the last points should be now, metres, (P, 2).
@@ -380,6 +406,7 @@ class _Plan:
     contacts: NDArray[np.intp]
     ids: NDArray[np.int64]
     centroids: NDArray[np.float64]
+    track_rows: NDArray[np.intp]
     previous_rows: NDArray[np.intp]
     previous_bounds: NDArray[np.intp]
     predicted: NDArray[np.float64]
@@ -411,6 +438,7 @@ def _plan_follow(
     NDArray[np.intp],
     NDArray[np.int64],
     NDArray[np.float64],
+    NDArray[np.intp],
     NDArray[np.intp],
     NDArray[np.intp],
     NDArray[np.float64],
@@ -473,7 +501,7 @@ def _plan_follow(
         step = np.hypot(after[k, 0] - before[k, 0], after[k, 1] - before[k, 1])
         travel[k] = step + abs(turn) * reach
     return (
-        follows, ended_rows, turn, contacts, ids[contacts], after, previous_rows,
+        follows, ended_rows, turn, contacts, ids[contacts], after, continued, previous_rows,
         previous_bounds, predicted, current, current_bounds, travel,
     )  # fmt: skip
 
@@ -521,3 +549,74 @@ def _inherit(
             beside[j] = True
     rows = np.flatnonzero(beside)
     return particles, rows, anchor[rows], np.flatnonzero(lost)
+
+
+@njit
+def _alpha_beta(
+    position: NDArray[np.float64],
+    velocity: NDArray[np.float64],
+    measured: NDArray[np.float64],
+    alpha: float,
+    gate: float,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """One step of an alpha-beta filter on each row (``proxy.smoothing``).
+
+    A row is predicted a frame's step ahead at its velocity and moved the share
+    ``alpha`` of the way to its measurement; the velocity takes ``beta = alpha² /
+    (2 - alpha)`` of the surprise (Benedict and Bordner's pairing). A motion at
+    constant velocity is followed without lag, and the measurement's frame-to-frame
+    noise is damped. A row seen for the second time (velocity NaN) or surprised by
+    more than ``gate`` metres (a strike, a sudden start) takes its measurement as it
+    is, and the step that got it there as its velocity.
+    """
+    beta = alpha * alpha / (2.0 - alpha)
+    smoothed = np.empty_like(measured)
+    rate = np.empty_like(measured)
+    for k in range(len(measured)):
+        px = position[k, 0] + velocity[k, 0]
+        py = position[k, 1] + velocity[k, 1]
+        sx, sy = measured[k, 0] - px, measured[k, 1] - py
+        if not np.isfinite(px + py) or np.hypot(sx, sy) > gate:
+            smoothed[k] = measured[k]
+            rate[k, 0] = measured[k, 0] - position[k, 0]
+            rate[k, 1] = measured[k, 1] - position[k, 1]
+            continue
+        smoothed[k, 0] = px + alpha * sx
+        smoothed[k, 1] = py + alpha * sy
+        rate[k, 0] = velocity[k, 0] + beta * sx
+        rate[k, 1] = velocity[k, 1] + beta * sy
+    return smoothed, rate
+
+
+@njit
+def _smooth_points(
+    previous: NDArray[np.float64],
+    previous_bounds: NDArray[np.intp],
+    before: NDArray[np.float64],
+    after: NDArray[np.float64],
+    turn: float,
+    measured: NDArray[np.float64],
+    predecessor: NDArray[np.intp],
+    alpha: float,
+) -> NDArray[np.float64]:
+    """Each followed point carried rigidly by its contact's smoothed motion (from
+    ``before`` to ``after``, turned by ``turn``), then moved the share ``alpha`` of
+    the way to where it is measured: the contact's shape follows the contour slowly,
+    its motion at once. New points stay where they are measured."""
+    contact = np.empty(len(previous), np.intp)
+    for k in range(len(previous_bounds) - 1):
+        contact[previous_bounds[k] : previous_bounds[k + 1]] = k
+    cos, sin = np.cos(turn), np.sin(turn)
+    points = measured.copy()
+    for j in range(len(predecessor)):
+        p = predecessor[j]
+        if p < 0:
+            continue
+        k = contact[p]
+        x = previous[p, 0] - before[k, 0]
+        y = previous[p, 1] - before[k, 1]
+        px = x * cos - y * sin + after[k, 0]
+        py = x * sin + y * cos + after[k, 1]
+        points[j, 0] = px + alpha * (measured[j, 0] - px)
+        points[j, 1] = py + alpha * (measured[j, 1] - py)
+    return points

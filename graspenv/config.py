@@ -508,8 +508,8 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 #: Each preset's measured error: the worst drift, millimetres, of the final object
 #: poses of the benchmark's scenarios against the reference preset, each the mean
 #: over three sub-pixel placements (``graspenv bench``, README "Speed against
-#: error"). Measured on 2026-12-03 with the sub-steps that follow the motion
-#: (``physics.substep_travel``); the worst scenario is the flick for ``fast`` and
+#: error"), with the sub-steps that follow the motion (``physics.substep_travel``);
+#: the worst scenario is the flick for ``fast`` and
 #: the slide for ``default`` (0.59 mm on the two-hand carry, 0.47 mm on the flick).
 PRESET_DRIFT_MM: dict[str, float] = {"fast": 20.70, "default": 0.78, "reference": 0.0}
 

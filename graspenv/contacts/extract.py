@@ -28,7 +28,7 @@ without shrinking curves.
 Measured against the analytic boundary of 400 random ellipses with 6.3-12.6 px
 semi-axes (6-12 mm fingertips on the default table): signed distance of outline
 vertices and edge midpoints in pixels, and outline length over the true perimeter
-(``python -m tests.contacts.measure_outline``):
+(``python -m graspenv.bench.outline``):
 
 ================  ===========  ========  =======  ===========  ==========
 mask rendered by  outline      mean      RMS      largest |.|  length

@@ -39,7 +39,7 @@ whose minimum lands on the edge of its range searches again around that minimum 
 it lies inside, which follows the cost downhill past S.
 
 **Measured** (window 4, S = 3; ``OPENBLAS_NUM_THREADS=1 python -m
-tests.contacts.measure_matching``, figures from several runs). Fast and exhaustive
+graspenv.bench.matching``, figures from several runs). Fast and exhaustive
 successors agree on 99.95 % of 40 001 fingertip points (6-12 mm ellipses rendered at
 the table's pixels, one 60 Hz frame at up to 0.5 m/s and ±3 rad/s, 2-4 mm spacing,
 arbitrary start points) and on 100 % of 20 480 points of 512-point hand outlines. All
@@ -47,14 +47,10 @@ disagreements come at 0.39-0.5 m/s and none is a tie: the exhaustive successor l
 across the fingertip, on contour running the other way, because a 7-8 mm step brings
 the new trailing side nearer the old leading side than the new leading side is. The
 same hand outlines resampled from the predicted start (no FFT) agree on 100 % too.
-Time with one BLAS thread (best of interleaved runs on a shared two-core machine,
-2026-12-01): at 512 points fast 0.09 ms, exhaustive 0.38 ms (4.2×; 3.1× from
-arbitrary start points, which need the FFT); 7.4× at 1 024 points, 12.6× at 2 048.
-The fast path is a fixed sequence of about 45 numpy calls of one to a few
-microseconds each (44 µs at 32 points), most of its time up to 512 points: below
-about 128 points the exhaustive search is the cheaper, at 256 it takes twice the fast
-one's time (``correspond(method="auto")`` searches exhaustively up to 256 × 256
-point pairs).
+The fast path is a fixed sequence of about 45 numpy calls, so below about 128
+points the exhaustive search is the cheaper (``correspond(method="auto")`` searches
+exhaustively up to 256 × 256 point pairs); the measured times are in the README
+("Matching: fast against exhaustive").
 
 **Particles** (:func:`correspond`): the rule of docs/design.md (section 2, step 4) made
 one-to-one. The predecessor of current point j is, among the previous points whose

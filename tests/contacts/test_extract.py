@@ -8,10 +8,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from graspenv.bench.contact_scenes import ellipse_mask_exact, ellipse_signed_distance
 from graspenv.contacts import find_components, outline_from_chain, signed_area, validate_mask
 from graspenv.contacts.extract import outlines_from_chains
-
-from ._scenes import ellipse_mask_exact, ellipse_signed_distance
 
 
 def _pixel_counts(mask: np.ndarray) -> list[int]:

@@ -7,6 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from graspenv.bench.contact_scenes import fingertip_motion, hand_motion
 from graspenv.contacts import (
     agreement,
     correspond,
@@ -17,8 +18,6 @@ from graspenv.contacts import (
     resample_closed,
     window_costs,
 )
-
-from ._scenes import fingertip_motion, hand_motion
 
 SQUARE = np.array([[0, 0], [2, 0], [2, 2], [0, 2]], dtype=float)
 

@@ -7,11 +7,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from graspenv.bench.contact_scenes import ellipse_mask_world
 from graspenv.contacts import find_components, orient_ccw, resample_closed, signed_area
 from graspenv.contacts.resample import orient_ccw_batch, resample_closed_batch
 from graspenv.surface.geometry import Surface
-
-from ._scenes import ellipse_mask_world
 
 SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])  # counter-clockwise
 

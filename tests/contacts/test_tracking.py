@@ -7,11 +7,10 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+from graspenv.bench.contact_scenes import Finger, render_fingers, world_ellipse_distance
 from graspenv.config import ContactConfig
 from graspenv.contacts import ContactFrame, ContactTracker, signed_area
 from graspenv.surface.geometry import Surface
-
-from ._scenes import Finger, render_fingers, world_ellipse_distance
 
 TIP = (0.008, 0.006)  # fingertip semi-axes, metres
 

@@ -2,7 +2,7 @@
 
 Run from the project root (an optional argument: fingertip frame pairs, default 2000)::
 
-    .venv/bin/python -m tests.contacts.measure_matching
+    .venv/bin/python -m graspenv.bench.matching
 
 The exhaustive matcher's row blocks keep BLAS to one thread: on this busy two-core
 machine a threaded product of 512 points took 10-20 ms instead of 0.5 ms, which would
@@ -24,6 +24,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from graspenv.bench.contact_scenes import DT, fingertip_motion, hand_motion
 from graspenv.contacts.matching import (
     _aligned_diagonal,
     _complex,
@@ -33,8 +34,6 @@ from graspenv.contacts.matching import (
     window_costs,
 )
 from graspenv.contacts.resample import resample_closed
-
-from ._scenes import DT, fingertip_motion, hand_motion
 
 WINDOW = 4
 SEARCH = 3
@@ -84,14 +83,14 @@ def _agreement(pairs: int, make: Callable[[np.random.Generator], Pair], seed: in
     if misses:
         offsets = np.array([abs(o) for o, _, _, _ in misses])
         speeds = np.array([s for _, s, _, _ in misses])
-        ties = sum(t for _, _, t, _ in misses)
-        across = sum(a for _, _, _, a in misses)
+        ties = sum(int(t) for _, _, t, _ in misses)
+        reversed_count = sum(int(a) for _, _, _, a in misses)
         print(
             f"  disagreements: |exhaustive - aligned index| {offsets.min()}-{offsets.max()} "
             f"(median {np.median(offsets):.0f}), at speeds {speeds.min():.2f}-"
             f"{speeds.max():.2f} m/s, equal costs (ties): {ties}"
         )
-        print(f"  exhaustive pick on a stretch of contour running the other way: {across}")
+        print(f"  exhaustive pick on a stretch of contour running the other way: {reversed_count}")
 
 
 def _correlation_peaks(p: np.ndarray, q: np.ndarray) -> int:

@@ -7,7 +7,7 @@
    table at 12 sub-pixel placements, at several filter sizes: the mean and largest
    |yaw error|.
 
-Run: ``python -m tests.contacts.measure_specks`` (about two minutes).
+Run: ``python -m graspenv.bench.specks`` (about two minutes).
 """
 
 from __future__ import annotations

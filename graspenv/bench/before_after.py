@@ -7,7 +7,7 @@ commands on both trees, then compare the folders::
     graspenv interactions --out DIR/interactions.md
     graspenv bench --replays 1 --out DIR/bench
     graspenv compare --episodes 100 --out DIR/compare
-    python -m tests.bench.compare_results BEFORE_DIR AFTER_DIR
+    python -m graspenv.bench.before_after BEFORE_DIR AFTER_DIR
 
 What counts as a change:
 

@@ -1,6 +1,6 @@
 """Measure the traced and offset outlines against analytic ellipses.
 
-Run: ``.venv/bin/python -m tests.contacts.measure_outline`` (from the project root).
+Run: ``.venv/bin/python -m graspenv.bench.outline`` (from the project root).
 Fingertip ellipses of 6-12 mm semi-axes at the default table's ~0.955 mm pixels,
 rendered by pixel-centre sampling and by ``cv2.ellipse``; errors are signed distances
 from outline points (vertices and edge midpoints) to the analytic boundary, pixels.
@@ -10,9 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from graspenv.bench.contact_scenes import (
+    ellipse_mask_cv2,
+    ellipse_mask_exact,
+    ellipse_signed_distance,
+)
 from graspenv.contacts.extract import find_components
-
-from ._scenes import ellipse_mask_cv2, ellipse_mask_exact, ellipse_signed_distance
 
 
 def _with_midpoints(poly: np.ndarray) -> np.ndarray:

@@ -3,8 +3,8 @@
 The bench plays each scenario at three placements; where a setting's figure moves
 between two versions of the code, more placements tell a shift from a heavy tail.
 
-Run: ``python -m tests.bench.measure_placements SCENARIO COUNT [OVERRIDES_JSON]``,
-e.g. ``python -m tests.bench.measure_placements turn 12
+Run: ``python -m graspenv.bench.placements SCENARIO COUNT [OVERRIDES_JSON]``,
+e.g. ``python -m graspenv.bench.placements turn 12
 '{"proxy": {"track_hand_rotation": false, "predicted_resampling": false}}'``.
 """
 

@@ -5,8 +5,9 @@ Times each stage of ``GraspEnv.step`` from inside (the pipeline's stages from
 scripted agent (or random actions), then panda-gym's ``PandaPickAndPlace-v3`` with
 random actions in the same process.
 
-Run: ``python -m tests.envs.measure_step [STRATEGY] [--random]`` (default
-``pinch-and-turn``; about 15 s).
+Run: ``python -m graspenv.bench.step_profile [STRATEGY] [--random]`` (default
+``pinch-and-turn``, any scripted strategy registered under the
+``graspenv.strategies`` entry points).
 """
 
 from __future__ import annotations
@@ -23,10 +24,9 @@ import graspenv  # noqa: F401  (registers the environments)
 import graspenv.envs.grasp_env as grasp_env
 import graspenv.simulation as simulation
 import graspenv.surface.controller as controller
-from agents.scripted import STRATEGIES
 from graspenv.bench.speed import PEER_ID, peer_available, peer_steps_per_second
 
-SPENT: collections.Counter[str] = collections.Counter()
+SPENT: collections.defaultdict[str, float] = collections.defaultdict(float)
 
 
 def _timed(owner: Any, name: str, label: str) -> None:
@@ -61,10 +61,22 @@ def _instrument() -> None:
     _timed(grasp_env.GraspEnv, "step", "the whole step")
 
 
+def _strategy(name: str) -> Any:
+    """The scripted strategy registered as ``name`` (``graspenv.strategies`` entry
+    points: graspenv never imports the repository's agents itself)."""
+    from importlib.metadata import entry_points
+
+    for ep in entry_points(group="graspenv.strategies"):
+        table = ep.load()
+        if name in table:
+            return table[name]
+    raise SystemExit(f"no scripted strategy named {name!r} is registered")
+
+
 def main(argv: list[str]) -> None:
     name = next((a for a in argv if not a.startswith("--")), "pinch-and-turn")
     random = "--random" in argv
-    strategy = STRATEGIES[name]
+    strategy = _strategy(name)
     env = gym.make(strategy.env_id, **strategy.env_kwargs)
     agent = strategy.agent(env)
     env.action_space.seed(0)

@@ -1,134 +1,92 @@
-"""Small charts drawn with OpenCV (the project's only image library): line charts
-(learning curves), grouped bar charts (the strategy benchmark) and speed-against-
-error scatters with their Pareto front (the fidelity benchmark)."""
+"""The project's charts, drawn with matplotlib (the Agg backend: no display needed):
+line charts (learning curves, noise levels, frame cost), grouped bar charts (the
+strategy benchmark), speed-against-error scatters with their Pareto front (the
+fidelity benchmark) and annotated heat maps (the grasp-space grid).
+
+Each chart comes back as a BGR ``uint8`` image of the size asked for, so pictures
+can be put side by side and written with :func:`write_png`. matplotlib is the
+``plots`` extra (``pip install 'graspenv[plots]'``; the ``train`` and ``dev`` extras
+include it); without it a chart raises an ImportError that says so.
+"""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["bar_chart", "line_chart", "pareto_chart", "pareto_front", "write_png"]
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
-# Colour-blind-safe palette (Okabe–Ito), BGR.
-PALETTE = [
-    (178, 114, 0),
-    (0, 159, 230),
-    (115, 158, 0),
-    (167, 121, 204),
-    (0, 94, 213),
-    (233, 180, 86),
-    (66, 228, 240),
-    (0, 0, 0),
+__all__ = [
+    "HeatPanel",
+    "bar_chart",
+    "heat_maps",
+    "line_chart",
+    "pareto_chart",
+    "pareto_front",
+    "write_png",
 ]
-FONT = cv2.FONT_HERSHEY_SIMPLEX
-INK = (40, 40, 40)
-MUTED = (120, 120, 120)
-GRID = (225, 225, 225)
+
+#: Colour-blind-safe palette (Okabe–Ito).
+PALETTE = ("#0072B2", "#E69F00", "#009E73", "#CC79A7", "#D55E00", "#56B4E9", "#F0E442", "#000000")
+INK = "#282828"
+MUTED = "#787878"
+_DPI = 100
 
 
-def _text(
-    img: NDArray[np.uint8],
-    text: str,
-    org: tuple[int, int],
-    scale: float = 0.45,
-    anchor: str = "left",
-    colour: tuple[int, int, int] = INK,
-) -> None:
-    (w, h), _ = cv2.getTextSize(text, FONT, scale, 1)
-    x, y = org
-    if anchor == "centre":
-        x -= w // 2
-    elif anchor == "right":
-        x -= w
-    cv2.putText(img, text, (x, y + h // 2), FONT, scale, colour, 1, cv2.LINE_AA)
+def _pyplot() -> Any:
+    """matplotlib's pyplot on the Agg backend, or an ImportError naming the extra."""
+    try:
+        import matplotlib
+    except ImportError as error:  # pragma: no cover - the test environment has it
+        raise ImportError(
+            "graspenv's charts need matplotlib: pip install 'graspenv[plots]'"
+        ) from error
+    matplotlib.use("Agg", force=True)
+    import matplotlib.pyplot as plt
+    from cycler import cycler
+
+    plt.rcParams.update(
+        {
+            "axes.prop_cycle": cycler(color=PALETTE),
+            "axes.edgecolor": INK,
+            "axes.labelcolor": INK,
+            "axes.titlesize": 11,
+            "axes.labelsize": 9,
+            "xtick.labelsize": 8,
+            "ytick.labelsize": 8,
+            "legend.fontsize": 8,
+            "legend.frameon": False,
+            "axes.grid": True,
+            "grid.color": "#e1e1e1",
+            "axes.axisbelow": True,
+        }
+    )
+    return plt
 
 
-def _ticks(lo: float, hi: float, n: int = 5) -> NDArray[np.float64]:
-    span = hi - lo if hi > lo else 1.0
-    raw = span / n
-    step = 10 ** np.floor(np.log10(raw))
-    for factor in (1, 2, 2.5, 5, 10):
-        if step * factor >= raw:
-            step *= factor
-            break
-    first = np.ceil(lo / step) * step
-    return np.arange(first, hi + 1e-9 * span, step)
+def _figure(size: tuple[int, int]) -> tuple[Figure, Axes]:
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(size[0] / _DPI, size[1] / _DPI), dpi=_DPI)
+    return fig, ax
 
 
-def _label(value: float) -> str:
-    if value != 0 and (abs(value) >= 1e5 or abs(value) < 1e-2):
-        return f"{value:.0e}".replace("e+0", "e").replace("e+", "e")
-    return f"{value:g}"
-
-
-class _Axes:
-    def __init__(
-        self,
-        size: tuple[int, int],
-        xlim: tuple[float, float],
-        ylim: tuple[float, float],
-        margin: tuple[int, int, int, int] = (70, 20, 45, 55),
-    ) -> None:
-        self.width, self.height = size
-        self.left, self.right, self.top, self.bottom = margin
-        self.xlim, self.ylim = xlim, ylim
-        self.img = np.full((self.height, self.width, 3), 255, np.uint8)
-
-    def x(self, value: float) -> int:
-        lo, hi = self.xlim
-        span = self.width - self.left - self.right
-        return round(self.left + (value - lo) / max(hi - lo, 1e-12) * span)
-
-    def y(self, value: float) -> int:
-        lo, hi = self.ylim
-        span = self.height - self.top - self.bottom
-        return round(self.height - self.bottom - (value - lo) / max(hi - lo, 1e-12) * span)
-
-    def frame(
-        self, title: str, xlabel: str, ylabel: str, xticks: bool = True, yticks: bool = True
-    ) -> None:
-        img = self.img
-        for tick in _ticks(*self.ylim) if yticks else ():
-            cv2.line(img, (self.left, self.y(tick)), (self.width - self.right, self.y(tick)), GRID)
-            _text(img, _label(tick), (self.left - 6, self.y(tick)), anchor="right")
-        if xticks:
-            for tick in _ticks(*self.xlim):
-                _text(
-                    img,
-                    _label(tick),
-                    (self.x(tick), self.height - self.bottom + 14),
-                    anchor="centre",
-                )
-        cv2.rectangle(
-            img, (self.left, self.top), (self.width - self.right, self.height - self.bottom), INK
-        )
-        _text(img, title, (self.width // 2, 18), 0.55, "centre")
-        _text(img, xlabel, (self.width // 2, self.height - 14), anchor="centre")
-        ylabel_img = np.full((22, self.height), 255, np.uint8)
-        cv2.putText(
-            ylabel_img,
-            ylabel,
-            (self.height // 2 - 4 * len(ylabel), 16),
-            FONT,
-            0.45,
-            40,
-            1,
-            cv2.LINE_AA,
-        )
-        rotated = cv2.rotate(ylabel_img, cv2.ROTATE_90_COUNTERCLOCKWISE)
-        img[:, 2:24] = np.minimum(img[:, 2:24], rotated[:, :, None])
-
-
-def _legend(img: NDArray[np.uint8], names: Sequence[str], x: int, y: int) -> None:
-    for i, name in enumerate(names):
-        colour = PALETTE[i % len(PALETTE)]
-        cv2.rectangle(img, (x, y + 18 * i - 5), (x + 12, y + 18 * i + 5), colour, -1)
-        _text(img, name, (x + 18, y + 18 * i))
+def _image(fig: Figure, path: str | Path | None) -> NDArray[np.uint8]:
+    """The figure as a BGR image (written as PNG when ``path`` is given), closed."""
+    fig.canvas.draw()
+    rgba = np.asarray(fig.canvas.buffer_rgba())  # type: ignore[attr-defined]
+    image = np.ascontiguousarray(rgba[:, :, 2::-1])
+    _pyplot().close(fig)
+    if path is not None:
+        write_png(image, path)
+    return image
 
 
 def line_chart(
@@ -139,22 +97,29 @@ def line_chart(
     ylabel: str,
     ylim: tuple[float, float] | None = None,
     size: tuple[int, int] = (720, 420),
+    categories: Sequence[str] = (),
 ) -> NDArray[np.uint8]:
-    """One line per series ``name → (x, y)`` (points marked); written as PNG when
+    """One line per series ``name → (x, y)``, points marked (non-finite y left out);
+    with ``categories`` the x values 0, 1, ... are those names. Written as PNG when
     ``path`` is given."""
-    xs = [float(v) for x, _ in series.values() for v in x] or [0.0, 1.0]
-    ys = [float(v) for _, y in series.values() for v in y if np.isfinite(v)] or [0.0, 1.0]
-    axes = _Axes(size, (min(0.0, min(xs)), max(xs)), ylim or (min(ys), max(ys)))
-    axes.frame(title, xlabel, ylabel)
-    for i, (x, y) in enumerate(series.values()):
-        colour = PALETTE[i % len(PALETTE)]
-        points = [(axes.x(a), axes.y(b)) for a, b in zip(x, y, strict=True) if np.isfinite(b)]
-        if len(points) > 1:
-            cv2.polylines(axes.img, [np.array(points, np.int32)], False, colour, 2, cv2.LINE_AA)
-        for p in points:
-            cv2.circle(axes.img, p, 3, colour, -1, cv2.LINE_AA)
-    _legend(axes.img, list(series), axes.left + 10, axes.top + 12)
-    return _write(axes.img, path)
+    fig, ax = _figure(size)
+    for name, (x, y) in series.items():
+        xs, ys = np.asarray(x, float), np.asarray(y, float)
+        keep = np.isfinite(ys)
+        ax.plot(xs[keep], ys[keep], marker="o", markersize=3, linewidth=1.6, label=name)
+    xs_all = [float(v) for x, _ in series.values() for v in x]
+    if xs_all:
+        ax.set_xlim(min(0.0, min(xs_all)), max(xs_all) if max(xs_all) > 0 else 1.0)
+    if categories:
+        ax.set_xticks(range(len(categories)), list(categories))
+        ax.set_xlim(-0.2, len(categories) - 0.8)
+    if ylim is not None:
+        ax.set_ylim(*ylim)
+    ax.set(title=title, xlabel=xlabel, ylabel=ylabel)
+    if series:
+        ax.legend(loc="best")
+    fig.tight_layout()
+    return _image(fig, path)
 
 
 def bar_chart(
@@ -168,56 +133,44 @@ def bar_chart(
     size: tuple[int, int] | None = None,
 ) -> NDArray[np.uint8]:
     """Grouped bars: for each group (x axis) one bar per series; NaN values are left
-    out. ``errors`` gives (low, high) whiskers per bar. Written as PNG when ``path``
-    is given."""
+    out. ``errors`` gives (low, high) whiskers per bar, as values. Written as PNG
+    when ``path`` is given."""
     n = max(len(series), 1)
     width = size[0] if size else max(480, 90 + len(groups) * (30 * n + 40))
-    axes = _Axes(
-        (width, size[1] if size else 420), (0.0, float(len(groups))), ylim, (70, 20, 45, 75)
-    )
-    axes.frame(title, "", ylabel, xticks=False)
-    slot = (axes.x(1.0) - axes.x(0.0)) * 0.8 / n
-    for g, group in enumerate(groups):
-        _text(axes.img, group, (axes.x(g + 0.5), axes.height - axes.bottom + 14), 0.42, "centre")
-        for s, (name, values) in enumerate(series.items()):
-            value = float(values[g])
-            if not np.isfinite(value):
-                continue
-            x0 = int(axes.x(g + 0.1) + s * slot)
-            x1 = int(x0 + slot - 2)
-            colour = PALETTE[s % len(PALETTE)]
-            cv2.rectangle(
-                axes.img, (x0, axes.y(max(value, ylim[0]))), (x1, axes.y(ylim[0])), colour, -1
-            )
-            if errors is not None and name in errors:
-                lo, hi = errors[name][g]
-                xc = (x0 + x1) // 2
-                cv2.line(axes.img, (xc, axes.y(lo)), (xc, axes.y(hi)), INK, 1, cv2.LINE_AA)
-                for v in (lo, hi):
-                    cv2.line(axes.img, (xc - 3, axes.y(v)), (xc + 3, axes.y(v)), INK, 1)
-    legend_x = axes.left + 10
-    for s, name in enumerate(series):
-        colour = PALETTE[s % len(PALETTE)]
-        x = legend_x
-        cv2.rectangle(axes.img, (x, axes.height - 30), (x + 12, axes.height - 20), colour, -1)
-        _text(axes.img, name, (x + 17, axes.height - 25))
-        (w, _), _ = cv2.getTextSize(name, FONT, 0.45, 1)
-        legend_x += w + 40
-    return _write(axes.img, path)
+    fig, ax = _figure((width, size[1] if size else 420))
+    slot = 0.8 / n
+    centres = np.arange(len(groups), dtype=float)
+    for s, (name, values) in enumerate(series.items()):
+        heights = np.asarray(values, float)
+        keep = np.isfinite(heights)
+        x = centres - 0.4 + slot * (s + 0.5)
+        ax.bar(x[keep], heights[keep] - ylim[0], slot * 0.92, bottom=ylim[0], label=name)
+        if errors is not None and name in errors:
+            bounds = np.asarray(errors[name], float)
+            mid = np.where(keep, heights, np.nan)
+            low = np.maximum(mid - bounds[:, 0], 0.0)[keep]
+            high = np.maximum(bounds[:, 1] - mid, 0.0)[keep]
+            ax.errorbar(
+                x[keep], heights[keep], yerr=[low, high], fmt="none", ecolor=INK, elinewidth=1,
+                capsize=3,
+            )  # fmt: skip
+    ax.set_xticks(centres, list(groups), fontsize=8)
+    ax.set_xlim(-0.5, len(groups) - 0.5)
+    ax.set_ylim(*ylim)
+    ax.set(title=title, ylabel=ylabel)
+    ax.grid(axis="x", visible=False)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=min(n, 6))
+    fig.tight_layout()
+    return _image(fig, path)
 
 
 def write_png(img: NDArray[np.uint8], path: str | Path) -> Path:
+    """Write a BGR image as PNG (its folders made as needed)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     if not cv2.imwrite(str(path), img, [cv2.IMWRITE_PNG_COMPRESSION, 9]):
         raise OSError(f"could not write {path}")
     return path
-
-
-def _write(img: NDArray[np.uint8], path: str | Path | None) -> NDArray[np.uint8]:
-    if path is not None:
-        write_png(img, path)
-    return img
 
 
 def pareto_front(points: Sequence[tuple[float, float]]) -> list[int]:
@@ -231,9 +184,6 @@ def pareto_front(points: Sequence[tuple[float, float]]) -> list[int]:
             front.append(i)
             best = y
     return sorted(front, key=lambda i: points[i][0])
-
-
-_LOG_TICKS = (0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
 
 
 def pareto_chart(
@@ -255,46 +205,133 @@ def pareto_chart(
     at 0.01), so one far outlier does not flatten every other point onto the floor.
     """
     floor = 0.01
+    fig, ax = _figure(size)
+    front = pareto_front(points)
+    shown = [i for i, (x, y) in enumerate(points) if x > 0 and np.isfinite(y)]
 
     def error(y: float) -> float:
-        return math.log10(max(y, floor)) if log_error else y
+        return max(y, floor) if log_error else y
 
-    finite = [(x, y) for x, y in points if x > 0 and np.isfinite(y)]
-    xs = np.log10([x for x, _ in finite] or [1.0])
-    ys = [error(y) for _, y in finite] or [1.0]
-    span = max(float(xs.max() - xs.min()), 0.3)
-    xlim = (float(xs.min()) - 0.08 * span, float(xs.max()) + 0.25 * span)
+    off = [i for i in shown if i not in front]
+    ax.scatter(
+        [points[i][0] for i in off], [error(points[i][1]) for i in off], s=12, color=INK,
+        zorder=3,
+    )  # fmt: skip
+    ax.plot(
+        [points[i][0] for i in front], [error(points[i][1]) for i in front], marker="o",
+        markersize=6, linewidth=2, color=PALETTE[1], zorder=4, label="Pareto front",
+    )  # fmt: skip
+    for i in shown:
+        if i in front or labels[i] in labelled:
+            ax.annotate(
+                labels[i], (points[i][0], error(points[i][1])), xytext=(5, 5),
+                textcoords="offset points", fontsize=7, color=INK if i in front else MUTED,
+            )  # fmt: skip
+    ax.set_xscale("log")
     if log_error:
-        low, high = min(ys), max(ys)
-        pad = 0.08 * max(high - low, 0.5)
-        ylim = (low - pad, high + pad)
+        ax.set_yscale("log")
     else:
-        ylim = (0.0, 1.12 * max(max(ys), 1e-9))
-    axes = _Axes(size, xlim, ylim)
-    axes.frame(title, xlabel, ylabel, xticks=False, yticks=not log_error)
-    for value in _LOG_TICKS:
-        lx = math.log10(value)
-        if xlim[0] <= lx <= xlim[1]:
-            column = axes.x(lx)
-            cv2.line(axes.img, (column, axes.top), (column, axes.height - axes.bottom), GRID)
-            _text(axes.img, f"{value:g}", (column, axes.height - axes.bottom + 14), anchor="centre")
-        if log_error and ylim[0] <= lx <= ylim[1]:
-            row = axes.y(lx)
-            cv2.line(axes.img, (axes.left, row), (axes.width - axes.right, row), GRID)
-            _text(axes.img, f"{value:g}", (axes.left - 6, row), anchor="right")
-    front = pareto_front(points)
-    placed = [(axes.x(math.log10(points[i][0])), axes.y(error(points[i][1]))) for i in front]
-    if len(placed) > 1:
-        cv2.polylines(axes.img, [np.array(placed, np.int32)], False, PALETTE[1], 2, cv2.LINE_AA)
-    for i, (x, y) in enumerate(points):
-        if x <= 0 or not np.isfinite(y):
-            continue
-        p = (axes.x(math.log10(x)), axes.y(error(y)))
-        on_front = i in front
-        cv2.circle(
-            axes.img, p, 5 if on_front else 3, PALETTE[1] if on_front else INK, -1, cv2.LINE_AA
+        top = max((points[i][1] for i in shown), default=1.0)
+        ax.set_ylim(0.0, 1.12 * max(top, 1e-9))
+    ax.margins(x=0.12)
+    ax.set(title=title, xlabel=xlabel, ylabel=ylabel)
+    ax.legend(loc="best")
+    fig.tight_layout()
+    return _image(fig, path)
+
+
+class HeatPanel:
+    """One panel of :func:`heat_maps`: a table of values coloured by their size
+    against a target.
+
+    Args:
+        title: the panel's title.
+        values: shape (rows, columns), NaN where there is no value; row 0 is drawn at
+            the bottom.
+        target: the |value| drawn at the middle of the colour scale (green under it,
+            red at twice it).
+        hatched: shape like ``values``, True where a cell is drawn hatched (not
+            counted); None for none.
+    """
+
+    def __init__(
+        self,
+        title: str,
+        values: NDArray[np.float64],
+        target: float,
+        hatched: NDArray[np.bool_] | None = None,
+    ) -> None:
+        self.title = title
+        self.values = np.asarray(values, float)
+        self.target = float(target)
+        self.hatched = (
+            np.zeros(self.values.shape, bool) if hatched is None else np.asarray(hatched, bool)
         )
-        if on_front or labels[i] in labelled:
-            colour = INK if on_front else MUTED
-            _text(axes.img, labels[i], (p[0] + 7, p[1] - 8), 0.38, colour=colour)
-    return _write(axes.img, path)
+
+
+def _signed(value: float) -> str:
+    if not math.isfinite(value):
+        return "-"
+    return f"{value:+.2f}" if abs(value) < 10 else f"{value:+.0f}"
+
+
+def heat_maps(
+    title: str,
+    panels: Sequence[HeatPanel],
+    x_labels: Sequence[str],
+    y_labels: Sequence[str],
+    xlabel: str,
+    ylabel: str,
+    note: str = "",
+    cell: tuple[int, int] = (74, 40),
+    text: Callable[[float], str] | None = None,
+) -> NDArray[np.uint8]:
+    """Side-by-side annotated heat maps sharing their axes, each cell's value printed
+    in it and coloured green (0) through yellow (at the panel's target) to red
+    (twice it and beyond); grey where there is no value."""
+    plt = _pyplot()
+    from matplotlib.colors import LinearSegmentedColormap
+
+    scale = LinearSegmentedColormap.from_list(
+        "target", [(0.0, "#5ac878"), (0.5, "#f0dc50"), (1.0, "#dc4646")]
+    ).with_extremes(bad="#c8c8c8")
+    rows, columns = len(y_labels), len(x_labels)
+    width = 90 + len(panels) * (columns * cell[0] + 40)
+    height = 110 + rows * cell[1]
+    fig, axes = plt.subplots(
+        1, len(panels), figsize=(width / _DPI, height / _DPI), dpi=_DPI, squeeze=False,
+        sharey=True,
+    )  # fmt: skip
+    show = text or (
+        lambda v: "-" if not math.isfinite(v) else f"{v:+.2f}" if abs(v) < 10 else f"{v:+.0f}"
+    )
+    for ax, panel in zip(axes[0], panels, strict=True):
+        ratio = np.abs(panel.values) / panel.target / 2.0
+        ax.imshow(
+            np.ma.masked_invalid(np.clip(ratio, 0.0, 1.0)), cmap=scale, vmin=0.0, vmax=1.0,
+            origin="lower", aspect="auto",
+        )  # fmt: skip
+        for (r, c), value in np.ndenumerate(panel.values):
+            ax.text(c, r, show(value), ha="center", va="center", fontsize=7.5, color=INK)
+            if panel.hatched[r, c]:
+                ax.add_patch(
+                    plt.Rectangle(
+                        (c - 0.5, r - 0.5), 1, 1, fill=False, hatch="///", edgecolor=MUTED,
+                        linewidth=0,
+                    )
+                )  # fmt: skip
+        ax.set_xticks(range(columns), list(x_labels), fontsize=7.5)
+        ax.set_yticks(range(rows), list(y_labels), fontsize=7.5)
+        ax.set_xticks(np.arange(columns + 1) - 0.5, minor=True)
+        ax.set_yticks(np.arange(rows + 1) - 0.5, minor=True)
+        ax.grid(which="minor", color="white", linewidth=2)
+        ax.grid(which="major", visible=False)
+        ax.tick_params(which="minor", length=0)
+        ax.set_title(panel.title, fontsize=9)
+        ax.set_xlabel(xlabel)
+    axes[0][0].set_ylabel(ylabel)
+    fig.suptitle(title, fontsize=10, x=0.01, ha="left")
+    if note:
+        fig.text(0.01, 0.01, note, fontsize=7.5, color=MUTED)
+    fig.tight_layout(rect=(0.0, 0.05 if note else 0.0, 1.0, 1.0))
+    return _image(fig, None)

@@ -53,7 +53,6 @@ from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
 
@@ -68,7 +67,7 @@ from graspenv.config import (
     resolve_fidelity,
 )
 from graspenv.geometry import tilt_angle, yaw_of
-from graspenv.plots import FONT, INK, MUTED, write_png
+from graspenv.plots import HeatPanel, heat_maps, write_png
 from graspenv.simulation import Simulation
 from graspenv.surface.noise import SensorNoise
 
@@ -447,27 +446,6 @@ _PANELS = (
 )
 
 
-def _colour(ratio: float) -> tuple[int, int, int]:
-    """BGR from green (0) through yellow (at the target, 1) to red (2 and beyond)."""
-    if not math.isfinite(ratio):
-        return (200, 200, 200)
-    t = min(max(ratio, 0.0), 2.0) / 2.0
-    green, yellow, red = np.array([120, 200, 90]), np.array([80, 220, 240]), np.array([70, 70, 220])
-    mix = (
-        green + (yellow - green) * (t / 0.5)
-        if t <= 0.5
-        else yellow + (red - yellow) * ((t - 0.5) / 0.5)
-    )
-    return tuple(int(v) for v in mix)  # type: ignore[return-value]
-
-
-def _hatch(img: NDArray[np.uint8], x0: int, y0: int, x1: int, y1: int) -> None:
-    for k in range(-(y1 - y0), x1 - x0, 8):
-        a = (x0 + max(k, 0), y0 + max(-k, 0))
-        b = (x0 + min(k + (y1 - y0), x1 - x0), y0 + min(x1 - x0 - k, y1 - y0))
-        cv2.line(img, a, b, (150, 150, 150), 1, cv2.LINE_AA)
-
-
 def heat_map_png(grid_map: GridMap, results: Sequence[CellResult], path: Path) -> Path:
     """:func:`heat_map_image` written to ``path``."""
     return write_png(heat_map_image(grid_map, results), path)
@@ -478,62 +456,26 @@ def heat_map_image(grid_map: GridMap, results: Sequence[CellResult]) -> NDArray[
     the target (green under, red at twice), its value printed; hatched: not counted
     (margin under :data:`MARGIN`)."""
     by_key = {(getattr(r.cell, grid_map.x), getattr(r.cell, grid_map.y)): r for r in results}
-    nx, ny = len(grid_map.x_values), len(grid_map.y_values)
-    cw, ch, left, top, gap = 74, 40, 80, 60, 40
-    panel_w = nx * cw
-    width = left + len(_PANELS) * (panel_w + gap) + 10
-    height = top + ny * ch + 60
-    img = np.full((height, width, 3), 255, np.uint8)
-    cv2.putText(img, grid_map.title, (10, 22), FONT, 0.6, INK, 1, cv2.LINE_AA)
-    for p, (key, label, target, counted) in enumerate(_PANELS):
-        x_start = left + p * (panel_w + gap)
-        cv2.putText(img, label, (x_start, 48), FONT, 0.45, INK, 1, cv2.LINE_AA)
+    shape = (len(grid_map.y_values), len(grid_map.x_values))
+    panels = []
+    for key, label, target, counted in _PANELS:
+        values, hatched = np.full(shape, math.nan), np.zeros(shape, bool)
         for j, yv in enumerate(grid_map.y_values):
-            y0 = top + (ny - 1 - j) * ch
-            if p == 0:
-                cv2.putText(img, _fmt(grid_map.y, yv), (6, y0 + ch // 2 + 5), FONT, 0.4, INK, 1)
             for i, xv in enumerate(grid_map.x_values):
-                x0 = x_start + i * cw
                 r = by_key.get((xv, yv))
-                value = math.nan if r is None else float(getattr(r, key))
-                cv2.rectangle(
-                    img, (x0, y0), (x0 + cw - 2, y0 + ch - 2), _colour(abs(value) / target), -1
-                )
-                if r is not None and counted and not getattr(r, counted):
-                    _hatch(img, x0, y0, x0 + cw - 2, y0 + ch - 2)
-                text = (
-                    "-"
-                    if not math.isfinite(value)
-                    else f"{value:+.2f}"
-                    if abs(value) < 10
-                    else f"{value:+.0f}"
-                )
-                (tw, _), _ = cv2.getTextSize(text, FONT, 0.42, 1)
-                cv2.putText(
-                    img,
-                    text,
-                    (x0 + (cw - tw) // 2, y0 + ch // 2 + 5),
-                    FONT,
-                    0.42,
-                    INK,
-                    1,
-                    cv2.LINE_AA,
-                )
-                if j == 0:
-                    label_x = _fmt(grid_map.x, xv)
-                    (tw, _), _ = cv2.getTextSize(label_x, FONT, 0.38, 1)
-                    cv2.putText(
-                        img, label_x, (x0 + (cw - tw) // 2, top + ny * ch + 14), FONT, 0.38, INK, 1
-                    )
-        cv2.putText(
-            img, grid_map.x.replace("_", " "), (x_start + panel_w // 2 - 30, top + ny * ch + 36),
-            FONT, 0.42, MUTED, 1, cv2.LINE_AA,
-        )  # fmt: skip
-    cv2.putText(
-        img, f"green: under target, red: twice it; hatched: margin < {MARGIN:g}, not counted",
-        (10, height - 8), FONT, 0.4, MUTED, 1, cv2.LINE_AA,
-    )  # fmt: skip
-    return img
+                if r is not None:
+                    values[j, i] = float(getattr(r, key))
+                    hatched[j, i] = bool(counted) and not getattr(r, counted)
+        panels.append(HeatPanel(label, values, target, hatched))
+    return heat_maps(
+        grid_map.title,
+        panels,
+        [_fmt(grid_map.x, v) for v in grid_map.x_values],
+        [_fmt(grid_map.y, v) for v in grid_map.y_values],
+        grid_map.x.replace("_", " "),
+        grid_map.y.replace("_", " "),
+        note=f"green: under target, red: twice it; hatched: margin < {MARGIN:g}, not counted",
+    )
 
 
 def write_outputs(

@@ -259,10 +259,11 @@ def chart(runs: Sequence[NoiseRun], path: Path) -> Path:
                 series,
                 None,
                 title,
-                "noise level: " + ", ".join(f"{i} {name}" for i, name in enumerate(levels)),
+                "noise level",
                 "",
                 ylim=(0.0, top),
                 size=(620, 400),
+                categories=levels,
             )
         )
     return write_png(np.concatenate(panels, axis=1), path)

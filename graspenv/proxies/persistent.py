@@ -476,13 +476,7 @@ def _plan_follow(
     # turned by the hand's turn (0 when that estimate is off).
     predicted = track_points[previous_rows]
     if track_hand_rotation or predicted_resampling:
-        cos, sin = np.cos(turn), np.sin(turn)
-        for k in range(len(contacts)):
-            for i in range(previous_bounds[k], previous_bounds[k + 1]):
-                x = predicted[i, 0] - before[k, 0]
-                y = predicted[i, 1] - before[k, 1]
-                predicted[i, 0] = (x * cos - y * sin) + after[k, 0]
-                predicted[i, 1] = (x * sin + y * cos) + after[k, 1]
+        predicted = _carry(predicted, previous_bounds, before, after, turn)
     if predicted_resampling:
         chosen, chosen_bounds = gather(outlines, outline_bounds, contacts)
         starts = predicted[previous_bounds[:-1]]
@@ -589,6 +583,28 @@ def _alpha_beta(
 
 
 @njit
+def _carry(
+    points: NDArray[np.float64],
+    bounds: NDArray[np.intp],
+    before: NDArray[np.float64],
+    after: NDArray[np.float64],
+    turn: float,
+) -> NDArray[np.float64]:
+    """Each contact's points (``points[bounds[k]:bounds[k + 1]]``) moved rigidly with
+    it: turned by ``turn`` about its centroid ``before[k]`` and carried to
+    ``after[k]``."""
+    carried = np.empty_like(points)
+    cos, sin = np.cos(turn), np.sin(turn)
+    for k in range(len(bounds) - 1):
+        for i in range(bounds[k], bounds[k + 1]):
+            x = points[i, 0] - before[k, 0]
+            y = points[i, 1] - before[k, 1]
+            carried[i, 0] = (x * cos - y * sin) + after[k, 0]
+            carried[i, 1] = (x * sin + y * cos) + after[k, 1]
+    return carried
+
+
+@njit
 def _smooth_points(
     previous: NDArray[np.float64],
     previous_bounds: NDArray[np.intp],
@@ -603,20 +619,11 @@ def _smooth_points(
     ``before`` to ``after``, turned by ``turn``), then moved the share ``alpha`` of
     the way to where it is measured: the contact's shape follows the contour slowly,
     its motion at once. New points stay where they are measured."""
-    contact = np.empty(len(previous), np.intp)
-    for k in range(len(previous_bounds) - 1):
-        contact[previous_bounds[k] : previous_bounds[k + 1]] = k
-    cos, sin = np.cos(turn), np.sin(turn)
+    carried = _carry(previous, previous_bounds, before, after, turn)
     points = measured.copy()
     for j in range(len(predecessor)):
         p = predecessor[j]
-        if p < 0:
-            continue
-        k = contact[p]
-        x = previous[p, 0] - before[k, 0]
-        y = previous[p, 1] - before[k, 1]
-        px = x * cos - y * sin + after[k, 0]
-        py = x * sin + y * cos + after[k, 1]
-        points[j, 0] = px + alpha * (measured[j, 0] - px)
-        points[j, 1] = py + alpha * (measured[j, 1] - py)
+        if p >= 0:
+            points[j, 0] = carried[p, 0] + alpha * (measured[j, 0] - carried[p, 0])
+            points[j, 1] = carried[p, 1] + alpha * (measured[j, 1] - carried[p, 1])
     return points

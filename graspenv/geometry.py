@@ -1,4 +1,4 @@
-"""Geometry shared by every stage: frames, yaw and tilt, and object footprints."""
+"""Geometry shared by every stage: frames, yaw and tilt, object extents and footprints."""
 
 from __future__ import annotations
 
@@ -13,9 +13,11 @@ from graspenv.jit import njit
 
 __all__ = [
     "SHAPE_CODES",
+    "bounding_radius",
     "convex_hull",
     "footprint",
     "footprint_depths",
+    "inscribed_radius",
     "rotate",
     "tilt_angle",
     "yaw_of",
@@ -32,6 +34,34 @@ def rotate(points: NDArray[np.float64], angle: float) -> NDArray[np.float64]:
     """Points turned counter-clockwise by ``angle`` radians about the origin, (N, 2)."""
     c, s = math.cos(angle), math.sin(angle)
     return np.asarray(points, dtype=float) @ np.array([[c, s], [-s, c]])
+
+
+def bounding_radius(config: ObjectConfig) -> float:
+    """The distance from an object's centre to its farthest point, metres.
+
+    A box's half diagonal, a sphere's radius, a cylinder's rim corner: the lever arm
+    of the fastest point when the object spins about its centre.
+    """
+    if config.shape == "box":
+        return 0.5 * math.sqrt(sum(s * s for s in config.size))
+    if config.shape == "sphere":
+        return config.size[0]
+    radius, height = config.size
+    return math.hypot(radius, 0.5 * height)
+
+
+def inscribed_radius(config: ObjectConfig) -> float:
+    """The smallest distance from an object's centre to its surface, metres.
+
+    Also its lowest possible resting height: the centre of an object lying on the
+    table in any orientation is at least this high.
+    """
+    if config.shape == "box":
+        return 0.5 * min(config.size)
+    if config.shape == "sphere":
+        return config.size[0]
+    radius, height = config.size
+    return min(radius, 0.5 * height)
 
 
 def footprint(obj: ObjectConfig, position: NDArray[np.float64], yaw: float) -> NDArray[np.float64]:

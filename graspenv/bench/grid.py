@@ -21,7 +21,7 @@ grasp:
   included), as a share of the travel, %.
 - ``slip``: squeeze and hold, then push across the grip along the contacts' line
   (so it cannot tip the object over them), the push growing by Coulomb's prediction
-  a second, until it slips (:func:`graspenv.bench.frontier.push_until_slip`). Error:
+  a second, until it slips (:func:`graspenv.bench.scenarios.push_until_slip`). Error:
   the push at slip against ``μ_f·ΣN_fingers + μ_t·N_table``, %.
 
 **Margins.** Whether a rigid pair of fingertips could hold the grasp at all is
@@ -56,9 +56,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.bench.frontier import Played, play, push_until_slip, write_rows
 from graspenv.bench.interactions import FINGER_RADIUS, pinch, with_objects
 from graspenv.bench.jobs import run_jobs
+from graspenv.bench.playback import Played, play
+from graspenv.bench.results import write_rows
+from graspenv.bench.scenarios import push_until_slip
 from graspenv.config import (
     FIDELITY_PRESETS,
     ObjectConfig,

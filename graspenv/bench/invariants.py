@@ -74,6 +74,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ObjectConfig, ProxyConfig, SceneConfig
+from graspenv.geometry import inscribed_radius
 from graspenv.physics import EDGE_RADIUS
 from graspenv.simulation import Simulation
 from graspenv.surface.hand import Hand
@@ -222,20 +223,6 @@ def speed_bound(scene: SceneConfig, finger_speed: float) -> float:
     substep = 1.0 / (scene.surface.fps * scene.physics.substeps)
     control_dt = max(scene.physics.control_time, substep)
     return finger_speed + REBOUND_DEPTH / control_dt
-
-
-def inscribed_radius(config: ObjectConfig) -> float:
-    """The smallest distance from an object's centre to its surface, metres.
-
-    Also its lowest possible resting height: the centre of an object lying on the
-    table in any orientation is at least this high.
-    """
-    if config.shape == "box":
-        return 0.5 * min(config.size)
-    if config.shape == "sphere":
-        return config.size[0]
-    radius, height = config.size
-    return min(radius, 0.5 * height)
 
 
 def _rotation(quaternion: NDArray[np.float64]) -> NDArray[np.float64]:

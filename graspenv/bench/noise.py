@@ -31,7 +31,6 @@ from typing import Any
 
 import numpy as np
 
-from graspenv.bench.frontier import write_rows
 from graspenv.bench.grid import (
     SLIDE,
     TURN,
@@ -43,6 +42,7 @@ from graspenv.bench.grid import (
     placed,
 )
 from graspenv.bench.jobs import run_jobs
+from graspenv.bench.results import write_rows
 from graspenv.plots import line_chart, write_png
 from graspenv.surface.noise import TABLE_NOISE, SensorNoise
 

@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from graspenv.bench.frontier import DEPTH
 from graspenv.bench.interactions import BOX, pinch, with_objects
 from graspenv.bench.invariants import InvariantChecker, hand_speed
+from graspenv.bench.scenarios import DEPTH
 from graspenv.config import SceneConfig, load_config
 from graspenv.simulation import Simulation
 from graspenv.surface.render import render_mask

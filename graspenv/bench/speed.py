@@ -2,7 +2,7 @@
 
 Headline figures are wall clocks of whole runs, what a user sees:
 
-- **Scenes.** The canonical two-finger turn (:func:`~graspenv.bench.frontier.turn_scene`)
+- **Scenes.** The canonical two-finger turn (:func:`~graspenv.bench.scenarios.turn_scene`)
   at the default and ``fast`` presets, and the ten-finger two-hand carry at the
   default: the masks are rendered first, then a new :class:`Simulation` plays them
   all; the figure is simulated time over the wall time of that whole loop (the median
@@ -44,7 +44,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.bench.frontier import turn_scene, two_hands_scene
+from graspenv.bench.scenarios import turn_scene, two_hands_scene
 from graspenv.config import FIDELITY_PRESETS, SceneConfig, load_config
 from graspenv.simulation import STAGES, Simulation
 from graspenv.surface.render import render_mask

@@ -7,7 +7,7 @@ rotation (radians) about its own centre, and ramp its press; a :class:`GroupMoti
 moves several fingers as one rigid body about a pivot. Motions are given as totals
 over the phase, so a phase ends exactly where it says whatever the frame rate: the
 twist is the total divided by the phase's duration, and the shapes' exact motion law
-(see :mod:`graspenv.surface.shapes`) makes the sum of the per-frame steps exact.
+(see :mod:`graspenv.surface.contact_shape`) makes the sum of the per-frame steps exact.
 
 The builders at the end script the interactions the physics tests need: a two-finger
 pinch that squeezes, turns, slides and lifts; a strike into an object's side; a rub

@@ -67,6 +67,6 @@ def _method(method: str) -> SceneConfig:
 def test_8_instant_proxies_cannot_hold_a_turn(turn: dict[str, float]) -> None:
     instant = scenarios.turn_in_place(_method("instant"))
     # The box ends 43° short of the fingers' 90° (76° short while particles pressed
-    # into a side could climb it: graspenv/physics/world.py, SUPPORT_CLEARANCE).
+    # into a side could climb it: graspenv/physics/rays.py, SUPPORT_CLEARANCE).
     assert abs(instant["yaw_error_deg"]) > 30.0
     assert abs(instant["yaw_error_deg"]) > 10 * abs(turn["yaw_error_deg"])

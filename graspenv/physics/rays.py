@@ -1,0 +1,134 @@
+"""Vertical ray casts: what lies under a point, and where a particle comes to rest.
+
+:class:`RayCaster` casts Bullet's batched rays onto the table and the objects
+(particles are transparent to them) for the world's queries:
+``PhysicsWorld.ray_heights`` (a new particle is put on the surface under its contour
+point), ``PhysicsWorld.rest_heights`` (the highest surface under a particle's disc)
+and, every frame, the rest height of each raised bottom particle
+(:data:`SUPPORT_CLEARANCE` says which surfaces count as its support).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pybullet as pb
+from numpy.typing import NDArray
+
+from graspenv.physics.bodies import SceneBodies
+from graspenv.physics.pool import OBJECT_GROUP, STATIC_GROUP
+from graspenv.physics.reports import RayHits
+
+__all__ = ["SUPPORT_CLEARANCE", "RayCaster"]
+
+_RAY_BATCH = 8192
+#: A bottom particle rests on a surface that its rays meet at least this many radii
+#: below its centre. A ray from 0.9 radius out of a particle pressed into an object's
+#: side can start inside the object (a convex hull), and Bullet reports a hit at its
+#: very start; counting that as a support raised the particle's resting height with
+#: it, so nothing pulled it down and the squeeze walked it up the side (README,
+#: "Accuracy across the grasp space": the slide's box tipped 9° and lost its grip).
+#: A particle on a top face's edge meets the face 0.44 radius below its centre or
+#: lower.
+SUPPORT_CLEARANCE = 0.1
+# Rays start this far above the highest point any object could reach while resting.
+_RAY_CLEARANCE = 0.5
+
+
+class RayCaster:
+    """Vertical rays down onto the table and the objects of one built scene.
+
+    Args:
+        client: the PyBullet client.
+        bodies: the scene's bodies (the table's hits count as height 0).
+        particle_radius: the particles' radius, metres: a particle's disc is its
+            centre and four points 0.9 radius around it.
+    """
+
+    def __init__(self, client: int, bodies: SceneBodies, particle_radius: float) -> None:
+        self._client = client
+        self._bodies = bodies
+        ring = 0.9 * particle_radius
+        self._disc_offsets = np.array(
+            [
+                [0.0, 0.0, 0.0],
+                [ring, 0.0, 0.0],
+                [-ring, 0.0, 0.0],
+                [0.0, ring, 0.0],
+                [0.0, -ring, 0.0],
+            ]
+        )
+
+    def top(self) -> float:
+        """Height rays start from, metres: above every object's bounding box."""
+        tops = [0.0]
+        for body in self._bodies.objects:
+            _, high = pb.getAABB(body, physicsClientId=self._client)
+            tops.append(high[2])
+        return max(tops) + _RAY_CLEARANCE
+
+    def heights(self, points: NDArray[np.float64]) -> RayHits:
+        """The first surface under each point from above, and the object hit.
+
+        Args:
+            points: metres, world frame, shape (N, 2).
+        """
+        n = points.shape[0]
+        height = np.zeros(n)
+        hit_object = np.full(n, -1, dtype=np.int64)
+        if n == 0:
+            return RayHits(height, hit_object)
+        top = self.top()
+        starts = np.column_stack([points, np.full(n, top)])
+        # Ending just under the table top keeps rays short (fewer broadphase visits).
+        ends = np.column_stack([points, np.full(n, -1e-3)])
+        table = self._bodies.table
+        object_of_body = self._bodies.object_of_body
+        for lo in range(0, n, _RAY_BATCH):
+            hits = pb.rayTestBatch(
+                starts[lo : lo + _RAY_BATCH].tolist(),
+                ends[lo : lo + _RAY_BATCH].tolist(),
+                collisionFilterMask=OBJECT_GROUP | STATIC_GROUP,
+                physicsClientId=self._client,
+            )
+            for i, hit in enumerate(hits, start=lo):
+                body = hit[0]
+                if body < 0 or body == table:
+                    continue
+                height[i] = hit[3][2]
+                hit_object[i] = object_of_body.get(body, -1)
+        return RayHits(height, hit_object)
+
+    def support_heights(
+        self, points: NDArray[np.float64], clearance: float = 0.0
+    ) -> NDArray[np.float64]:
+        """Height of the highest surface below each particle's disc (0: table), (n,).
+
+        Rays go down from the centre and from four points 0.9 radius around it, so
+        a particle whose centre has just passed an edge still counts as resting on
+        it (pulling it down there would drive it into the edge and kick the object).
+        A surface met less than ``clearance`` below a ray's start is not a support
+        (:data:`SUPPORT_CLEARANCE`).
+
+        Args:
+            points: where the rays start from, metres, world frame, shape (n, 3).
+            clearance: metres.
+        """
+        n = points.shape[0]
+        if n == 0:
+            return np.zeros(0)
+        starts = (points[:, None, :] + self._disc_offsets[None, :, :]).reshape(-1, 3)
+        ends = starts.copy()
+        ends[:, 2] = -1e-3
+        height = np.zeros(starts.shape[0])
+        table = self._bodies.table
+        for lo in range(0, starts.shape[0], _RAY_BATCH):
+            hits = pb.rayTestBatch(
+                starts[lo : lo + _RAY_BATCH].tolist(),
+                ends[lo : lo + _RAY_BATCH].tolist(),
+                collisionFilterMask=OBJECT_GROUP | STATIC_GROUP,
+                physicsClientId=self._client,
+            )
+            for i, hit in enumerate(hits, start=lo):
+                if hit[0] >= 0 and hit[0] != table and hit[3][2] <= starts[i, 2] - clearance:
+                    height[i] = hit[3][2]
+        return height.reshape(n, -1).max(axis=1)

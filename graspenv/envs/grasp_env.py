@@ -4,8 +4,9 @@ The environment is orchestration only. One step, in order: the finger controller
 turns the action into the hand's motion; for each camera frame of the step the task
 may push the object (a disturbance), the hand is rendered into a contact mask, the
 mask goes through the whole pipeline (:class:`graspenv.simulation.Simulation`), and
-the hand advances; then grasp metrics are measured and the task gives the reward,
-success and termination.
+the hand advances; then grasp metrics are measured, the task updates its episode
+record and gives the reward, success and termination. The environment calls the
+task's hooks (:class:`graspenv.tasks.base.Task`) and knows no task by name.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from graspenv.config import (
     FIDELITY_PRESETS,
     ConfigError,
     SceneConfig,
+    SurfaceConfig,
     build_section,
     read_config_file,
     resolve_fidelity,
@@ -34,7 +36,7 @@ from graspenv.geometry import footprint, yaw_of
 from graspenv.simulation import Simulation
 from graspenv.surface.controller import ActionMode, ControllerConfig, FingerController
 from graspenv.surface.render import render_mask
-from graspenv.tasks.base import EpisodeState, RewardConfig, Task, TaskConfig
+from graspenv.tasks.base import EpisodeState, RewardConfig, Task, TaskConfig, TaskEpisode
 from graspenv.tasks.metrics import GraspMetrics, grasp_metrics
 from graspenv.viz import draw_mask, draw_points, draw_polyline, id_colour
 
@@ -57,7 +59,9 @@ def load_env_config(
     The file (TOML or JSON, e.g. ``envs_configs/turn_in_place.toml``) or dict holds
     the scene tables (``surface``, ``contacts``, ``proxy``, ``physics``; the object
     is drawn per episode by the task) and ``task``, ``controller`` and ``reward``
-    tables; each missing table or key takes the task's built-in default.
+    tables; each missing table or key takes the task's built-in default. The
+    ``task`` table holds the fields of the task's own configuration type
+    (``task.config_type``): a key another task has is unknown here.
 
     Raises:
         ConfigError: unknown keys or bad values, naming the key and the file.
@@ -79,7 +83,7 @@ def load_env_config(
         )
     return (
         scene_from({k: v for k, v in data.items() if k not in _TASK_TABLES}, source),
-        build_section(TaskConfig, data.get("task"), "task", source, task.default_config),
+        build_section(task.config_type, data.get("task"), "task", source, task.default_config),
         build_section(
             ControllerConfig, data.get("controller"), "controller", source, task.default_controller
         ),
@@ -152,7 +156,9 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
 
     metadata: dict[str, Any] = {  # noqa: RUF012  (Gymnasium's own convention)
         "render_modes": ["rgb_array", "rgb_array_3d"],
-        "render_fps": 30,
+        # One picture per step at the default timing; each instance gives its own
+        # (``1 / dt``) in its copy.
+        "render_fps": SurfaceConfig().fps / TaskConfig().frame_skip,
     }
 
     def __init__(
@@ -196,29 +202,16 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
             raise ValueError(f"action_mode must be 'fingers' or 'grip', got {mode!r}")
         self.action_mode: ActionMode = mode
 
+        # One picture per step: 1 / dt, frame_skip camera frames.
+        self.metadata = {
+            **self.metadata,
+            "render_fps": self._base_scene.surface.fps / self.task.config.frame_skip,
+        }
+
         self._sim = Simulation(self._base_scene)
         self.controller = FingerController(controller_config, self._sim.surface, self.action_mode)
         n = controller_config.n_fingers
         self.action_space = spaces.Box(-1.0, 1.0, (self.controller.action_size,), np.float32)
-        state_size = 13 + 5 * n + self.task.goal_size + 1
-        vector = spaces.Box(-BOUND, BOUND, (state_size,), np.float32)
-        if obs_mode == "state":
-            self.observation_space = vector
-        elif obs_mode == "mask":
-            self.observation_space = spaces.Dict(
-                {"mask": spaces.Box(0, 255, (*MASK_SHAPE, 1), np.uint8), "state": vector}
-            )
-        else:
-            goal = spaces.Box(-BOUND, BOUND, (self.task.goal_size,), np.float32)
-            self.observation_space = spaces.Dict(
-                {
-                    "observation": spaces.Box(
-                        -BOUND, BOUND, (state_size - self.task.goal_size,), np.float32
-                    ),
-                    "achieved_goal": goal,
-                    "desired_goal": goal,
-                }
-            )
         sizes = {
             "object_position": 3,
             "object_quaternion": 4,
@@ -239,8 +232,28 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         """Where each quantity sits in the state vector (``obs_mode="state"``, and the
         ``state`` entry of ``"mask"``); units as in the class docstring (forces in
         10 N, contact counts in tens)."""
+        state_size = int(ends[-1])
+        vector = spaces.Box(-BOUND, BOUND, (state_size,), np.float32)
+        if obs_mode == "state":
+            self.observation_space = vector
+        elif obs_mode == "mask":
+            self.observation_space = spaces.Dict(
+                {"mask": spaces.Box(0, 255, (*MASK_SHAPE, 1), np.uint8), "state": vector}
+            )
+        else:
+            goal = spaces.Box(-BOUND, BOUND, (self.task.goal_size,), np.float32)
+            self.observation_space = spaces.Dict(
+                {
+                    "observation": spaces.Box(
+                        -BOUND, BOUND, (state_size - self.task.goal_size,), np.float32
+                    ),
+                    "achieved_goal": goal,
+                    "desired_goal": goal,
+                }
+            )
         self._goal = np.zeros(self.task.goal_size)
         self._state: EpisodeState | None = None
+        self._episode = TaskEpisode()
         self._metrics = GraspMetrics.empty()
         self._finger_force = np.zeros(n)
         self._finger_contacts = np.zeros(n)
@@ -266,22 +279,17 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         self._goal = task.draw_goal(rng, obj)
         grip = task.start_grip(rng, obj, self._goal)
         self._sim.reset(task.scene(self._base_scene, obj))
-        initial_velocity = getattr(task, "initial_velocity", None)
-        if initial_velocity is not None:
+        start = task.initialize_episode(rng, obj, self._goal)
+        if start.linear_velocity is not None:
             self._sim.set_object_state(
-                task.object_name, linear_velocity=initial_velocity(rng), rolling=True
+                task.object_name, linear_velocity=start.linear_velocity, rolling=start.rolling
             )
+        self._episode = start.episode
         self.controller.place_grip(grip)
         self._mask = np.zeros(self._sim.surface.shape, np.uint8)
         _, q = self._sim.object_pose(task.object_name)
         self._yaw_unwrapped = self._yaw_last = yaw_of(q)
-        # The disturbance's direction and peak (tasks that push the object use them).
-        heading = rng.uniform(-math.pi, math.pi)
-        extra: dict[str, Any] = {
-            "force_direction": (math.cos(heading), math.sin(heading)),
-            "force_peak": float(rng.uniform(*task.config.force)),
-        }
-        self._state = self._read_state(step=0, extra=extra)
+        self._state = self._read_state(step=0)
         info = self._info(success=False, n_particles=0)
         return self._observation(), info
 
@@ -293,16 +301,17 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         n_particles = 0
         for _ in range(task.config.frame_skip):
             self.controller.apply(action)
-            force = task.disturbance(self._state)
+            force = task.disturbance(self._state, self._episode)
             if force is not None:
                 sim.apply_force(task.object_name, force)
             self._mask = render_mask(self.controller.hand, sim.surface)
             n_particles = sim.step(self._mask).n_particles
             self.controller.advance()
-        self._state = self._read_state(self._state.step + 1, self._state.extra)
-        success = task.is_success(self._state, self._goal)
+        self._state = self._read_state(self._state.step + 1)
+        self._episode = task.after_step(self._state, self._episode)
+        success = task.is_success(self._state, self._goal, self._episode)
         fell = bool(self._state.position[2] < -0.02)
-        terminated = task.is_done(self._state, success) or fell
+        terminated = task.is_done(self._state, success, self._episode) or fell
         info = self._info(success, n_particles)
         # From the goals as the observation carries them (float32), so that
         # compute_reward on observed goals gives back exactly this reward.
@@ -346,7 +355,7 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
 
     # -- internals ---------------------------------------------------------------------
 
-    def _read_state(self, step: int, extra: dict[str, Any]) -> EpisodeState:
+    def _read_state(self, step: int) -> EpisodeState:
         sim, name = self._sim, self.task.object_name
         position, quaternion = sim.object_pose(name)
         linear, angular = sim.object_velocity(name)
@@ -367,7 +376,6 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
             force_closure=m.force_closure,
             step=step,
             fingers=self.controller.finger_positions(),
-            extra=extra,
         )
 
     def _measure(
@@ -432,9 +440,8 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
             small = cv2.resize(self._mask, MASK_SHAPE[::-1], interpolation=cv2.INTER_AREA)
             return {"mask": small.reshape(*MASK_SHAPE, 1).astype(np.uint8), "state": vector}
         assert self._state is not None
-        goal = self.task.goal_size
-        start = 13 + 3 * self.controller.config.n_fingers
-        observation = np.concatenate([vector[:start], vector[start + goal :]])
+        goal = self.observation_layout["goal"]
+        observation = np.concatenate([vector[: goal.start], vector[goal.stop :]])
         return {
             "observation": observation,
             "achieved_goal": np.clip(self.task.achieved_goal(self._state), -BOUND, BOUND).astype(
@@ -467,7 +474,7 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         surface = sim.surface
         canvas = draw_mask(self._mask)
         obj = sim.config.objects[0]
-        if self.task.goal_size == 3 and self.task.name != "CatchBall":
+        if self.task.pose_goal:
             goal_pose = np.array([self._goal[0], self._goal[1], 0.0])
             draw_polyline(
                 canvas, surface, footprint(obj, goal_pose, float(self._goal[2])), (90, 200, 90)

@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -20,7 +20,21 @@ from numpy.typing import NDArray
 from graspenv.config import ObjectConfig, SceneConfig, ShapeName
 from graspenv.surface.controller import ActionMode, ControllerConfig, GripState
 
-__all__ = ["EpisodeState", "RewardConfig", "Task", "TaskConfig", "wrap_angle"]
+__all__ = [
+    "DISTURBANCE_DRAWS",
+    "EpisodeStart",
+    "EpisodeState",
+    "RewardConfig",
+    "Task",
+    "TaskConfig",
+    "TaskEpisode",
+    "check_range",
+    "wrap_angle",
+]
+
+#: Random numbers :meth:`Task.initialize_episode` draws per episode: SqueezeHold's
+#: disturbance (heading, peak); other tasks draw and discard them.
+DISTURBANCE_DRAWS = 2
 
 
 def wrap_angle(angle: NDArray[np.float64] | float) -> NDArray[np.float64]:
@@ -56,9 +70,13 @@ class RewardConfig:
 
 @dataclass(frozen=True)
 class TaskConfig:
-    """Ranges an episode is drawn from, success tolerances and timing.
+    """What every task's configuration has: the ranges an episode is drawn from,
+    success tolerances and timing. A task with settings of its own extends it
+    (``graspenv.tasks.library``: ``SqueezeHoldConfig``, ``CatchBallConfig``) and
+    names it as :attr:`Task.config_type`; the ``task`` table of an environment file
+    holds only fields of its task's type.
 
-    Lengths in metres, angles in radians, masses in kilograms, forces in newtons.
+    Lengths in metres, angles in radians, masses in kilograms.
 
     Attributes:
         shape: the object's shape.
@@ -74,10 +92,6 @@ class TaskConfig:
         position_tolerance: success distance.
         yaw_tolerance: success yaw error (ignored when goal_yaw is (0, 0)).
         frame_skip: camera frames per environment step (the action is held).
-        hold_steps: SqueezeHold: steps the grasp must hold against the disturbance.
-        settle_steps: SqueezeHold: steps before the disturbance starts.
-        force: SqueezeHold: (min, max) peak disturbance force.
-        ball_speed: CatchBall: (min, max) initial rolling speed, m/s.
     """
 
     shape: ShapeName = "box"
@@ -91,27 +105,32 @@ class TaskConfig:
     position_tolerance: float = 0.01
     yaw_tolerance: float = math.radians(5.0)
     frame_skip: int = 2
-    hold_steps: int = 30
-    settle_steps: int = 30
-    force: tuple[float, float] = (0.5, 2.0)
-    ball_speed: tuple[float, float] = (0.15, 0.35)
 
     def __post_init__(self) -> None:
         expected = {"box": 3, "sphere": 1, "cylinder": 2}[self.shape]
         for key in ("size_min", "size_max"):
             if len(getattr(self, key)) != expected:
                 raise ValueError(f"task.{key} for a {self.shape} needs {expected} values")
-        for key in ("mass", "friction", "goal_distance", "goal_yaw", "force", "ball_speed"):
-            lo, hi = getattr(self, key)
-            if not lo <= hi:
-                raise ValueError(f"task.{key} must be (min, max) with min <= max, got {(lo, hi)}")
+        for key in ("mass", "friction", "goal_distance", "goal_yaw"):
+            check_range(key, getattr(self, key))
         if self.frame_skip < 1:
             raise ValueError(f"task.frame_skip must be >= 1, got {self.frame_skip}")
 
 
+def check_range(key: str, value: tuple[float, float]) -> None:
+    """Raise ``ValueError`` naming ``task.<key>`` unless ``value`` is (min, max)."""
+    lo, hi = value
+    if not lo <= hi:
+        raise ValueError(f"task.{key} must be (min, max) with min <= max, got {(lo, hi)}")
+
+
 @dataclass
 class EpisodeState:
-    """What the task sees after a step.
+    """What the task sees after a step: the object and the hand, measured.
+
+    Task-owned memory of the episode (a hold's reference pose, a disturbance's
+    draw) is not here but in the task's own episode record
+    (:meth:`Task.initialize_episode`, :meth:`Task.after_step`).
 
     Attributes:
         position: object centre, metres, world frame, (3,).
@@ -120,8 +139,7 @@ class EpisodeState:
         linear_velocity: m/s, (3,); angular_velocity: rad/s, (3,).
         tilt: radians; slip: m/s; grip_force: N; force_closure: bool.
         step: environment steps since reset.
-        grip: the grip's state (grip mode) or None.
-        extra: task-specific memory (e.g. where the hand holds the object).
+        fingers: finger positions, metres, world frame, (n, 2).
     """
 
     position: NDArray[np.float64]
@@ -135,24 +153,66 @@ class EpisodeState:
     force_closure: bool
     step: int
     fingers: NDArray[np.float64]
-    extra: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class TaskEpisode:
+    """A task's own record of one episode, beyond what :class:`EpisodeState`
+    measures: empty for most tasks. A task that keeps bookkeeping (SqueezeHold's
+    hold) subclasses it; :meth:`Task.initialize_episode` makes it, and
+    :meth:`Task.after_step` returns the next one (records are never mutated)."""
+
+
+@dataclass(frozen=True)
+class EpisodeStart:
+    """How a task starts an episode once its object is placed.
+
+    Attributes:
+        episode: the task's record of the episode (:class:`TaskEpisode`).
+        linear_velocity: the object's initial velocity, m/s, world frame, (3,), or
+            None to leave it at rest.
+        rolling: spin a sphere to roll at that velocity (rather than slide).
+    """
+
+    episode: TaskEpisode = field(default_factory=TaskEpisode)
+    linear_velocity: NDArray[np.float64] | None = None
+    rolling: bool = False
 
 
 class Task:
     """A grasp task: override the hooks that differ from these defaults.
 
+    The environment calls the hooks in this order and knows no task by name
+    (after dm_control's composer, where a task's hooks run at fixed points of the
+    episode and of the step):
+
+    - episode initialisation, at ``reset``: :meth:`draw_object` (the object and its
+      placement), :meth:`draw_goal`, :meth:`start_grip` (the hand), then, once the
+      scene is built, :meth:`initialize_episode` (initial velocities and the task's
+      own :class:`TaskEpisode` record);
+    - every camera frame of a step: :meth:`disturbance` (a force on the object);
+    - after each step: :meth:`after_step` (the next episode record, from the new
+      state), then :meth:`is_success` and :meth:`is_done` (termination), pure
+      functions of the state, the goal and the record.
+
     Class attributes:
         name: used in ids and configuration files.
-        action_mode / n_fingers: the defaults for this task's environment.
+        config_type: the :class:`TaskConfig` type of the ``task`` table.
+        default_config / default_controller / default_reward: the built-in tables.
+        default_action_mode: the default for this task's environment.
         goal_size: length of the goal vector.
+        pose_goal: the goal is a pose (x, y, yaw) the object should reach (drawn
+            in the top view), not some other target.
     """
 
     name = "task"
+    config_type: ClassVar[type[TaskConfig]] = TaskConfig
     default_action_mode: ActionMode = "grip"
-    default_config = TaskConfig()
+    default_config: ClassVar[TaskConfig] = TaskConfig()
     default_controller = ControllerConfig()
     default_reward = RewardConfig()
     goal_size = 3
+    pose_goal: ClassVar[bool] = True
     object_name = "object"
 
     def __init__(
@@ -160,12 +220,18 @@ class Task:
         config: TaskConfig | None = None,
         reward: RewardConfig | None = None,
     ) -> None:
-        self.config = config or self.default_config
+        config = config or self.default_config
+        if not isinstance(config, self.config_type):
+            raise TypeError(
+                f"{self.name} takes a {self.config_type.__name__}, got {type(config).__name__}"
+            )
+        self.config = config
         self.reward_config = reward or self.default_reward
 
-    # -- drawing an episode ----------------------------------------------------------
+    # -- episode initialisation ------------------------------------------------------
 
     def draw_object(self, rng: np.random.Generator) -> ObjectConfig:
+        """The episode's object, drawn from the ranges, placed where it starts."""
         cfg = self.config
         size = tuple(float(v) for v in rng.uniform(cfg.size_min, cfg.size_max))
         start = rng.uniform(-1.0, 1.0, 2) * np.asarray(cfg.start)
@@ -204,11 +270,31 @@ class Task:
         width = obj.size[0] if obj.shape == "box" else 2.0 * obj.size[0]
         return GripState(np.array(obj.position), obj.yaw, width + 0.02, False)
 
+    def initialize_episode(
+        self, rng: np.random.Generator, obj: ObjectConfig, goal: NDArray[np.float64]
+    ) -> EpisodeStart:
+        """The object's initial motion and the task's episode record, once the
+        scene is built; by default at rest, with an empty record.
+
+        Every task draws two numbers here, used or not (:data:`DISTURBANCE_DRAWS`),
+        so that an episode after an unseeded ``reset`` draws what it drew when the
+        environment drew SqueezeHold's disturbance for every task (v0's episodes,
+        bit for bit).
+        """
+        rng.random(DISTURBANCE_DRAWS)
+        return EpisodeStart()
+
     # -- during an episode -----------------------------------------------------------
 
-    def disturbance(self, state: EpisodeState) -> NDArray[np.float64] | None:
-        """A force (3,) in newtons to push the object with during the next step."""
+    def disturbance(self, state: EpisodeState, episode: TaskEpisode) -> NDArray[np.float64] | None:
+        """A force (3,) in newtons, world frame, on the object during the next camera
+        frame; None for none."""
         return None
+
+    def after_step(self, state: EpisodeState, episode: TaskEpisode) -> TaskEpisode:
+        """The episode record after a step that ended in ``state`` (unchanged by
+        default)."""
+        return episode
 
     def achieved_goal(self, state: EpisodeState) -> NDArray[np.float64]:
         return np.array([state.position[0], state.position[1], state.yaw])
@@ -229,10 +315,14 @@ class Task:
         position, yaw = self.goal_errors(achieved, desired)
         return (position <= self.config.position_tolerance) & (yaw <= self.config.yaw_tolerance)
 
-    def is_success(self, state: EpisodeState, goal: NDArray[np.float64]) -> bool:
+    def is_success(
+        self, state: EpisodeState, goal: NDArray[np.float64], episode: TaskEpisode
+    ) -> bool:
+        """Whether the task is achieved in ``state``: a pure function of its
+        arguments (bookkeeping belongs in :meth:`after_step`)."""
         return bool(self.goal_success(self.achieved_goal(state), goal))
 
-    def is_done(self, state: EpisodeState, success: bool) -> bool:
+    def is_done(self, state: EpisodeState, success: bool, episode: TaskEpisode) -> bool:
         """Whether the episode ends (terminated): on success by default."""
         return success
 

@@ -4,23 +4,91 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ObjectConfig
 from graspenv.surface.controller import ControllerConfig, GripState
-from graspenv.tasks.base import EpisodeState, Task, TaskConfig, wrap_angle
+from graspenv.tasks.base import (
+    EpisodeStart,
+    EpisodeState,
+    Task,
+    TaskConfig,
+    TaskEpisode,
+    check_range,
+    wrap_angle,
+)
 
 __all__ = [
     "TASKS",
     "CatchBall",
+    "CatchBallConfig",
+    "HoldEpisode",
     "SidePush",
     "SqueezeHold",
+    "SqueezeHoldConfig",
     "SqueezeSlide",
     "TopRub",
     "TurnInPlace",
 ]
+
+
+@dataclass(frozen=True)
+class SqueezeHoldConfig(TaskConfig):
+    """SqueezeHold's configuration: :class:`TaskConfig` and the disturbance.
+
+    Attributes:
+        hold_steps: steps the grasp must hold against the disturbance, >= 1.
+        settle_steps: steps before the disturbance starts, >= 0.
+        force: (min, max) peak disturbance force, newtons.
+    """
+
+    hold_steps: int = 30
+    settle_steps: int = 30
+    force: tuple[float, float] = (0.5, 2.0)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_range("force", self.force)
+        if self.hold_steps < 1:
+            raise ValueError(f"task.hold_steps must be >= 1, got {self.hold_steps}")
+        if self.settle_steps < 0:
+            raise ValueError(f"task.settle_steps must be >= 0, got {self.settle_steps}")
+
+
+@dataclass(frozen=True)
+class CatchBallConfig(TaskConfig):
+    """CatchBall's configuration: :class:`TaskConfig` and the ball's launch.
+
+    Attributes:
+        ball_speed: (min, max) initial rolling speed, m/s.
+    """
+
+    ball_speed: tuple[float, float] = (0.45, 0.6)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_range("ball_speed", self.ball_speed)
+
+
+@dataclass(frozen=True, eq=False)
+class HoldEpisode(TaskEpisode):
+    """SqueezeHold's record of an episode.
+
+    Attributes:
+        force_direction: unit planar direction (x, y) of the disturbance, world frame.
+        force_peak: the disturbance's peak, newtons.
+        hold_pose: the pose (x, y, yaw; metres, radians) the box must keep: where it
+            was on the last step before the force began.
+        held: whether the box has kept within tolerance of it since.
+    """
+
+    force_direction: tuple[float, float]
+    force_peak: float
+    hold_pose: NDArray[np.float64]
+    held: bool = True
 
 
 class SqueezeHold(Task):
@@ -34,7 +102,9 @@ class SqueezeHold(Task):
     """
 
     name = "SqueezeHold"
-    default_config = TaskConfig(
+    config_type = SqueezeHoldConfig
+    config: SqueezeHoldConfig
+    default_config = SqueezeHoldConfig(
         position_tolerance=0.005, yaw_tolerance=math.radians(3.0), force=(0.5, 2.0)
     )
 
@@ -51,24 +121,42 @@ class SqueezeHold(Task):
         cfg = self.config
         return (state.step - cfg.settle_steps) / cfg.hold_steps
 
-    def disturbance(self, state: EpisodeState) -> NDArray[np.float64] | None:
+    def initialize_episode(
+        self, rng: np.random.Generator, obj: ObjectConfig, goal: NDArray[np.float64]
+    ) -> EpisodeStart:
+        """Draw the disturbance's direction and peak."""
+        heading = rng.uniform(-math.pi, math.pi)
+        record = HoldEpisode(
+            force_direction=(math.cos(heading), math.sin(heading)),
+            force_peak=float(rng.uniform(*self.config.force)),
+            hold_pose=goal.copy(),
+        )
+        return EpisodeStart(episode=record)
+
+    def disturbance(self, state: EpisodeState, episode: TaskEpisode) -> NDArray[np.float64] | None:
+        assert isinstance(episode, HoldEpisode)
         ramp = self._phase(state)
         if ramp < 0.0 or ramp > 1.0:
             return None
-        direction = state.extra["force_direction"]
-        return float(state.extra["force_peak"]) * ramp * np.array([*direction, 0.0])
+        return episode.force_peak * ramp * np.array([*episode.force_direction, 0.0])
 
-    def is_success(self, state: EpisodeState, goal: NDArray[np.float64]) -> bool:
+    def after_step(self, state: EpisodeState, episode: TaskEpisode) -> HoldEpisode:
+        """Until the force starts, the pose to hold follows the box; then each step
+        outside the tolerances breaks the hold for good."""
+        assert isinstance(episode, HoldEpisode)
         cfg = self.config
-        phase = self._phase(state)
-        if phase <= 0.0:
-            state.extra["hold_pose"] = self.achieved_goal(state)
-            state.extra["held"] = True
-            return False
-        position, yaw = self.goal_errors(self.achieved_goal(state), state.extra["hold_pose"])
+        pose = self.achieved_goal(state)
+        if self._phase(state) <= 0.0:
+            return dataclasses.replace(episode, hold_pose=pose, held=True)
+        position, yaw = self.goal_errors(pose, episode.hold_pose)
         held = bool(position <= cfg.position_tolerance and yaw <= cfg.yaw_tolerance)
-        state.extra["held"] = state.extra["held"] and held
-        return phase >= 1.0 and bool(state.extra["held"])
+        return dataclasses.replace(episode, held=episode.held and held)
+
+    def is_success(
+        self, state: EpisodeState, goal: NDArray[np.float64], episode: TaskEpisode
+    ) -> bool:
+        assert isinstance(episode, HoldEpisode)
+        return self._phase(state) >= 1.0 and episode.held
 
     def goal_errors(
         self, achieved: NDArray[np.float64], desired: NDArray[np.float64]
@@ -76,7 +164,7 @@ class SqueezeHold(Task):
         position = np.linalg.norm(achieved[..., :2] - desired[..., :2], axis=-1)
         return position, np.abs(wrap_angle(achieved[..., 2] - desired[..., 2]))
 
-    def is_done(self, state: EpisodeState, success: bool) -> bool:
+    def is_done(self, state: EpisodeState, success: bool, episode: TaskEpisode) -> bool:
         return self._phase(state) >= 1.0
 
 
@@ -144,7 +232,10 @@ class CatchBall(Task):
 
     name = "CatchBall"
     goal_size = 3
-    default_config = TaskConfig(
+    pose_goal = False
+    config_type = CatchBallConfig
+    config: CatchBallConfig
+    default_config = CatchBallConfig(
         shape="sphere",
         size_min=(0.015,),
         size_max=(0.025,),
@@ -170,10 +261,15 @@ class CatchBall(Task):
         centre = np.array([0.05, obj.position[1] + rng.uniform(-0.05, 0.05)])
         return GripState(centre, math.pi / 2, 0.06, False)
 
-    def initial_velocity(self, rng: np.random.Generator) -> NDArray[np.float64]:
+    def initialize_episode(
+        self, rng: np.random.Generator, obj: ObjectConfig, goal: NDArray[np.float64]
+    ) -> EpisodeStart:
+        """Launch the ball rolling towards +x, within 0.2 rad of it."""
         speed = rng.uniform(*self.config.ball_speed)
         heading = rng.uniform(-0.2, 0.2)
-        return speed * np.array([math.cos(heading), math.sin(heading), 0.0])
+        velocity = speed * np.array([math.cos(heading), math.sin(heading), 0.0])
+        start = super().initialize_episode(rng, obj, goal)
+        return dataclasses.replace(start, linear_velocity=velocity, rolling=True)
 
     def achieved_goal(self, state: EpisodeState) -> NDArray[np.float64]:
         return np.array([state.linear_velocity[0], state.linear_velocity[1], 0.0])
@@ -181,10 +277,12 @@ class CatchBall(Task):
     def _on_table(self, state: EpisodeState) -> bool:
         return bool(np.all(np.abs(state.position[:2]) <= self.table_half) and state.position[2] > 0)
 
-    def is_success(self, state: EpisodeState, goal: NDArray[np.float64]) -> bool:
-        return self._on_table(state) and super().is_success(state, goal)
+    def is_success(
+        self, state: EpisodeState, goal: NDArray[np.float64], episode: TaskEpisode
+    ) -> bool:
+        return self._on_table(state) and super().is_success(state, goal, episode)
 
-    def is_done(self, state: EpisodeState, success: bool) -> bool:
+    def is_done(self, state: EpisodeState, success: bool, episode: TaskEpisode) -> bool:
         return success or not self._on_table(state)
 
 

@@ -3,12 +3,13 @@ keys name the key and the file."""
 
 from __future__ import annotations
 
+import dataclasses
 import re
 from pathlib import Path
 
 import pytest
 
-from graspenv.config import ConfigError, SceneConfig, to_dict
+from graspenv.config import ConfigError, SceneConfig, read_config_file, to_dict
 from graspenv.envs.grasp_env import load_env_config
 from graspenv.tasks.library import TASKS
 
@@ -34,6 +35,32 @@ def test_each_file_equals_the_built_in_defaults(name: str) -> None:
                 assert to_dict(loaded)[key] == value, key
             else:
                 assert to_dict(loaded)[key] == pytest.approx(value, rel=1e-9), key
+
+
+@pytest.mark.parametrize("name", list(TASKS))
+def test_each_file_lists_exactly_its_tasks_settings(name: str) -> None:
+    task = TASKS[name]
+    keys = set(read_config_file(_file(name))["task"])
+    assert keys == {f.name for f in dataclasses.fields(task.config_type)}
+
+
+@pytest.mark.parametrize(
+    ("task", "key", "value"),
+    [
+        ("TurnInPlace", "hold_steps", "30"),
+        ("SqueezeSlide", "ball_speed", "[0.4, 0.5]"),
+        ("SqueezeHold", "ball_speed", "[0.4, 0.5]"),
+        ("CatchBall", "force", "[0.5, 2.0]"),
+    ],
+)
+def test_another_tasks_key_names_key_and_file(
+    tmp_path: Path, task: str, key: str, value: str
+) -> None:
+    path = tmp_path / "env.toml"
+    path.write_text(f"[task]\n{key} = {value}\n")
+    with pytest.raises(ConfigError) as err:
+        load_env_config(TASKS[task], path)
+    assert f"task.{key}" in str(err.value) and str(path) in str(err.value)
 
 
 def test_unknown_key_names_key_and_file(tmp_path: Path) -> None:

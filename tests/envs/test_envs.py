@@ -289,3 +289,30 @@ def test_observation_layout_names_the_state_vector() -> None:
     assert np.allclose(obs[layout["object_quaternion"]], quaternion, atol=1e-6)
     assert np.allclose(obs[layout["goal"]], goal, atol=1e-6)
     assert obs[layout["finger_positions"]].shape == (4,)
+
+
+@pytest.mark.parametrize("env_id", ["graspenv/TopRub-v0", "graspenv/SqueezeSlide-v0"])
+def test_goal_observation_is_the_state_vector_without_the_goal(env_id: str) -> None:
+    state_env = _make(env_id)
+    goal_env = _make(env_id, obs_mode="goal")
+    try:
+        state, _ = state_env.reset(seed=2)
+        goal, _ = goal_env.reset(seed=2)
+        layout = state_env.unwrapped.observation_layout
+    finally:
+        state_env.close()
+        goal_env.close()
+    where = layout["goal"]
+    assert state.shape == state_env.observation_space.shape
+    assert np.array_equal(goal["observation"], np.delete(state, np.arange(where.start, where.stop)))
+    assert np.array_equal(goal["desired_goal"], state[where])
+
+
+def test_render_fps_is_one_picture_per_step() -> None:
+    env = GraspEnv("TurnInPlace", config={"task": {"frame_skip": 3}})
+    try:
+        assert env.metadata["render_fps"] == pytest.approx(1.0 / env.dt)
+        assert env.metadata["render_fps"] == pytest.approx(20.0)
+    finally:
+        env.close()
+    assert GraspEnv.metadata["render_fps"] == pytest.approx(30.0)

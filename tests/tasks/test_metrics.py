@@ -13,7 +13,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from numpy.typing import NDArray
 
-from graspenv.tasks import metrics
+from graspenv.tasks import quality
 from graspenv.tasks.metrics import (
     GraspMetrics,
     coulomb_slip_force,
@@ -267,7 +267,7 @@ def test_many_contacts_match_the_brute_force_facets(monkeypatch: pytest.MonkeyPa
     def no_fallback(*_: object) -> None:
         raise AssertionError("the incremental hull failed its check")
 
-    monkeypatch.setattr(metrics, "_facet_normals_by_enumeration", no_fallback)
+    monkeypatch.setattr(quality, "_facet_normals_by_enumeration", no_fallback)
     rng = np.random.default_rng(3)
     angle = rng.uniform(0.0, 2.0 * math.pi, 25)
     radial = np.column_stack([np.cos(angle), np.sin(angle)])
@@ -284,11 +284,11 @@ def test_the_exhaustive_fallback_agrees_with_the_hull() -> None:
     points = ring(5, radius=0.05, phase=0.4)
     normals = turned(-points, np.array([0.3, -0.2, 0.1, 0.0, -0.4]))
     wrenches = reference_wrenches(points, normals, 0.5, ORIGIN)
-    facets = metrics._facet_normals_by_enumeration(wrenches, 1e-9)
+    facets = quality._facet_normals_by_enumeration(wrenches, 1e-9)
     assert facets is not None
     fallback = float(np.min(np.max(wrenches @ facets.T, axis=0)))
     assert fallback == pytest.approx(ferrari_canny(points, normals, 0.5, ORIGIN), abs=1e-12)
-    assert metrics._facet_normals_by_enumeration(wrenches[:, [0, 1, 0]], 1e-9) is None
+    assert quality._facet_normals_by_enumeration(wrenches[:, [0, 1, 0]], 1e-9) is None
 
 
 def test_bad_inputs_are_rejected_with_the_value() -> None:

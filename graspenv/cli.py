@@ -341,9 +341,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"graspenv {args.command}: error: {err}", file=sys.stderr)
         return 2
     except ModuleNotFoundError as err:
+        hint = (
+            "pip install 'graspenv[plots]'"
+            if err.name == "matplotlib"
+            else "`make train-deps` installs the training extra"
+        )
         print(
-            f"graspenv {args.command}: error: needs {err.name}, which is not installed "
-            "(`make train-deps` installs the training extra)",
+            f"graspenv {args.command}: error: needs {err.name}, which is not installed ({hint})",
             file=sys.stderr,
         )
         return 2

@@ -6,7 +6,7 @@ fidelity benchmark) and annotated heat maps (the grasp-space grid).
 Each chart comes back as a BGR ``uint8`` image of the size asked for, so pictures
 can be put side by side and written with :func:`write_png`. matplotlib is the
 ``plots`` extra (``pip install 'graspenv[plots]'``; the ``train`` and ``dev`` extras
-include it); without it a chart raises an ImportError that says so.
+include it); without it a chart raises a ModuleNotFoundError that says so.
 """
 
 from __future__ import annotations
@@ -45,9 +45,10 @@ def _pyplot() -> Any:
     """matplotlib's pyplot on the Agg backend, or an ImportError naming the extra."""
     try:
         import matplotlib
-    except ImportError as error:  # pragma: no cover - the test environment has it
-        raise ImportError(
-            "graspenv's charts need matplotlib: pip install 'graspenv[plots]'"
+    except ImportError as error:
+        raise ModuleNotFoundError(
+            "graspenv's charts need matplotlib: pip install 'graspenv[plots]'",
+            name="matplotlib",
         ) from error
     matplotlib.use("Agg", force=True)
     import matplotlib.pyplot as plt

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 import cv2
 import numpy as np
+import pytest
 
 from graspenv.plots import HeatPanel, heat_maps, line_chart, pareto_chart
 
@@ -37,3 +39,10 @@ def test_pareto_chart_and_line_chart_write_pngs_of_their_size(tmp_path: Path) ->
     assert line.shape == (300, 500, 3)
     for name in ("p.png", "l.png"):
         assert cv2.imread(str(tmp_path / name)) is not None
+
+
+def test_without_matplotlib_a_chart_names_the_extra(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    with pytest.raises(ModuleNotFoundError, match=r"graspenv\[plots\]") as raised:
+        line_chart({"s": ([0, 1], [0.0, 1.0])}, None, "t", "x", "y")
+    assert raised.value.name == "matplotlib"

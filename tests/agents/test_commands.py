@@ -4,6 +4,9 @@ from __future__ import annotations
 
 import csv
 import json
+import re
+import subprocess
+import sys
 from pathlib import Path
 
 import cv2
@@ -12,6 +15,7 @@ import pytest
 from graspenv.cli import main
 
 TURN = "graspenv/TurnInPlace-v0"
+ROOT = Path(__file__).parents[2]
 
 
 def test_eval_scripted_writes_table_csv_and_json(
@@ -64,8 +68,8 @@ def test_compare_writes_table_csv_and_chart(tmp_path: Path) -> None:
 
 
 def test_compare_default_plan_runs_each_strategy_on_its_own_task() -> None:
-    from agents.compare import plan
-    from agents.scripted import STRATEGIES
+    from graspenv_agents.compare import plan
+    from graspenv_agents.scripted import STRATEGIES
 
     pairs = plan(None, None)
     scripted = {(env, spec) for env, spec in pairs if spec.startswith("scripted:")}
@@ -126,3 +130,24 @@ def test_a_model_file_that_is_not_a_model(
     path.write_bytes(b"not a zip")
     assert main(["eval", "--env", TURN, "--agent", str(path), "--episodes", "1"]) == 2
     assert "is not a stable-baselines3" in capsys.readouterr().err
+
+
+def test_the_command_starts_without_the_training_stack() -> None:
+    """Every `graspenv` run builds the parser, which imports the agents' commands: only
+    `train`, when it runs, may load stable-baselines3 and torch."""
+    done = subprocess.run(
+        [sys.executable, "-X", "importtime", "-m", "graspenv.cli", "--help"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    commands = set(re.findall(r"^    (\w+) ", done.stdout, re.MULTILINE))
+    assert {"train", "eval", "compare", "demo"} <= commands
+    imported = {
+        line.rsplit("|", 1)[-1].strip()
+        for line in done.stderr.splitlines()
+        if line.startswith("import time:")
+    }
+    assert "graspenv_agents.cli" in imported
+    assert not {m for m in imported if m.split(".")[0] in ("torch", "stable_baselines3")}

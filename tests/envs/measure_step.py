@@ -23,8 +23,8 @@ import graspenv  # noqa: F401  (registers the environments)
 import graspenv.envs.grasp_env as grasp_env
 import graspenv.simulation as simulation
 import graspenv.surface.controller as controller
-from agents.scripted import STRATEGIES
 from graspenv.bench.speed import PEER_ID, peer_available, peer_steps_per_second
+from graspenv_agents.scripted import STRATEGIES
 
 SPENT: collections.Counter[str] = collections.Counter()
 

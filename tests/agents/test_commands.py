@@ -149,5 +149,7 @@ def test_the_command_starts_without_the_training_stack() -> None:
         for line in done.stderr.splitlines()
         if line.startswith("import time:")
     }
-    assert "graspenv_agents.cli" in imported
+    # The entry point's own module comes through importlib, which the log leaves out;
+    # what it imports in turn is there.
+    assert "graspenv_agents.loading" in imported
     assert not {m for m in imported if m.split(".")[0] in ("torch", "stable_baselines3")}

@@ -6,7 +6,8 @@ A run folder records everything needed to reproduce and to use the result:
   command, package versions, the git commit, wall time and steps;
 - ``model.zip`` (final) and ``best_model.zip`` (best periodic evaluation), with
   ``vecnormalize.pkl`` when observations are normalised;
-- ``checkpoints/``, ``progress.csv`` (every logged value), ``tb/`` (TensorBoard);
+- ``checkpoints/``, ``progress.csv`` (every logged value), ``tb/`` (the same values
+  as TensorBoard event files, from stable-baselines3's logger);
 - ``evaluations.csv`` and ``learning_curve.png``: periodic deterministic
   evaluation (success rate and return against training steps).
 """
@@ -149,7 +150,7 @@ def train(
         steps, n_envs: override the file's ``n_timesteps`` and ``n_envs``.
         progress: receives the status lines before training starts (default: stderr).
         progress_bar: show stable-baselines3's progress bar (tqdm and rich) while
-            training; the values it logs go to ``progress.csv`` and ``tb/``.
+            training; what training logs goes to ``progress.csv`` and ``tb/``.
     """
     check_env_id(env_id)
     for name in LOGGING_PACKAGES:

@@ -12,8 +12,8 @@ from graspenv.cli import main
 
 pytest.importorskip("stable_baselines3")
 event_accumulator = pytest.importorskip("tensorboard.backend.event_processing.event_accumulator")
-# stable-baselines3 silences this warning of its progress bar's on import; pytest
-# restores the filters before each test.
+# stable-baselines3 silences its progress bar's warning (tqdm's rich bar is marked
+# experimental) when imported; pytest restores the warning filters before each test.
 pytestmark = pytest.mark.filterwarnings("ignore:rich is experimental")
 
 # Small enough for a few seconds of training; the evaluation and checkpoint

@@ -20,8 +20,11 @@ $(VENV)/.runtime: pyproject.toml | $(VENV)/bin/python
 	$(PIP) -e .
 	touch $@
 
-# The tests check the environments with stable-baselines3 too, so they need the
-# training extra (with the CPU torch pinned above).
+# The tests check the environments with stable-baselines3 too, and read back a short
+# run's TensorBoard log, so they need the training extra (stable-baselines3,
+# tensorboard, tqdm and rich, with the CPU torch pinned above). Both targets depend
+# on pyproject.toml: a changed package layout (agents/ installs as graspenv_agents)
+# reinstalls.
 $(VENV)/.dev: pyproject.toml $(VENV)/.runtime
 	$(PIP) $(TORCH) -e '.[dev,train]'
 	touch $@

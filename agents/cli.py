@@ -2,8 +2,9 @@
 
 graspenv never imports agents: these commands reach the ``graspenv`` command through
 the ``graspenv.commands`` entry-point group (``pyproject.toml``), each an ``add``
-function taking argparse's sub-parser table. Heavy imports (stable-baselines3,
-torch) happen when a command runs. User errors raise ``ValueError`` or
+function taking argparse's sub-parser table. The ``graspenv`` command imports this
+module whatever it is asked to do, so it must not import stable-baselines3 or torch:
+``train`` is imported when that command runs. User errors raise ``ValueError`` or
 ``FileNotFoundError``, which the ``graspenv`` command prints as one line.
 """
 
@@ -13,6 +14,10 @@ import argparse
 import sys
 from collections.abc import Callable
 from pathlib import Path
+
+from .compare import compare
+from .evaluate import FIRST_SEED, evaluate, summary_table
+from .loading import load_agent
 
 __all__ = ["add_compare", "add_eval", "add_train"]
 
@@ -27,7 +32,16 @@ def _check_episodes(episodes: int) -> None:
 
 
 def _train(args: argparse.Namespace) -> int:
-    from agents.train import train
+    # Here, not at the top: train imports stable-baselines3 and torch (seconds), which
+    # every other `graspenv` command would pay for on start; rich is in the training
+    # extra only.
+    import rich
+
+    from .train import train
+
+    # stable-baselines3's progress bar draws on rich's shared console: on stderr, like
+    # every progress line of `graspenv`, so that stdout keeps only the result.
+    rich.reconfigure(stderr=True)
 
     result = train(
         args.env,
@@ -69,8 +83,6 @@ def _progress(label: str) -> Callable[[int, int], None]:
 
 
 def _eval(args: argparse.Namespace) -> int:
-    from agents.evaluate import FIRST_SEED, evaluate, load_agent, summary_table
-
     _check_episodes(args.episodes)
     first = FIRST_SEED if args.seed is None else args.seed
     agent = load_agent(args.agent, first)
@@ -103,8 +115,6 @@ def add_eval(sub: argparse._SubParsersAction) -> None:
 
 
 def _compare(args: argparse.Namespace) -> int:
-    from agents.compare import compare
-
     _check_episodes(args.episodes)
     result = compare(args.env, args.agent, args.episodes, args.seed, Path(args.out), progress=_say)
     print(result.table)

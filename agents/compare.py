@@ -21,6 +21,13 @@ from typing import Any
 
 import numpy as np
 
+import graspenv
+from graspenv.plots import bar_chart, write_png
+
+from .evaluate import evaluate, summary_table
+from .loading import check_env_id, load_agent
+from .scripted import STRATEGIES
+
 __all__ = ["POLICIES", "CompareResult", "compare", "default_agents"]
 
 #: Learned policies shipped with the repository (``graspenv train`` run folders,
@@ -30,8 +37,6 @@ POLICIES = Path(__file__).parent / "policies"
 
 def default_agents() -> list[str]:
     """Every scripted strategy, every shipped policy, and random."""
-    from agents.scripted import STRATEGIES
-
     shipped = sorted(str(p) for p in POLICIES.glob("*") if (p / "run.json").is_file())
     return [f"scripted:{name}" for name in STRATEGIES] + shipped + ["random"]
 
@@ -44,17 +49,11 @@ class CompareResult:
 
 
 def _job(env_id: str, spec: str, seeds: Sequence[int]) -> dict[str, Any]:
-    from agents.evaluate import evaluate, load_agent
-
     return evaluate(env_id, load_agent(spec, seeds[0]), seeds).summary()
 
 
 def plan(env_ids: Sequence[str] | None, specs: Sequence[str] | None) -> list[tuple[str, str]]:
     """The (environment, agent spec) pairs to run, checking every name first."""
-    import graspenv
-    from agents.evaluate import load_agent
-    from agents.train import check_env_id
-
     for env_id in env_ids or ():
         check_env_id(env_id)
     explicit = bool(env_ids)
@@ -112,8 +111,6 @@ def write(
     summaries: Sequence[dict[str, Any]], out: Path, episodes: int
 ) -> tuple[str, tuple[Path, ...]]:
     """``compare.md``, ``compare.csv`` and ``compare.png``."""
-    from agents.evaluate import summary_table
-
     out.mkdir(parents=True, exist_ok=True)
     table = summary_table(summaries)
     (out / "compare.md").write_text(table + "\n")
@@ -129,8 +126,6 @@ def chart_png(summaries: Sequence[dict[str, Any]], path: Path, episodes: int) ->
     """Success (with 95 % whiskers) and grasp quality, one bar per kind of agent
     (scripted, each learned algorithm, random) in each task; where one kind has
     several agents on a task, the best by success is shown."""
-    from graspenv.plots import bar_chart, write_png
-
     tasks = sorted({s["env_id"] for s in summaries})
     kinds = list(dict.fromkeys(s["kind"] for s in summaries))
     best: dict[tuple[str, str], dict[str, Any]] = {}

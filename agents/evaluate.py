@@ -1,13 +1,7 @@
 """``graspenv eval``: play an agent over seeded episodes and measure it.
 
-An agent is named by a spec:
-
-- ``scripted:NAME``: a strategy from :data:`agents.scripted.STRATEGIES`;
-- ``random``: uniform random actions (seeded);
-- a path: a stable-baselines3 model (``.zip``) or a ``graspenv train`` run folder
-  (its ``best_model.zip``, else ``model.zip``). The run's ``run.json`` supplies the
-  algorithm and the environment arguments and wrapper it was trained with, and its
-  ``vecnormalize.pkl`` the observation normalisation.
+An agent is named by a spec (``scripted:NAME``, ``random`` or a model path), which
+:func:`graspenv_agents.loading.load_agent` resolves.
 
 Per episode: success (the last step's ``info["is_success"]``), return, length, time
 to the first successful step (simulated seconds), and the means over its steps of
@@ -21,9 +15,8 @@ from __future__ import annotations
 import csv
 import json
 import math
-import pickle
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -31,13 +24,17 @@ import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
+from graspenv.viz import write_animation
+
+from .loading import AgentSpec, make_env
+
 __all__ = [
-    "AgentSpec",
+    "FIRST_SEED",
     "Episode",
     "Evaluation",
     "evaluate",
-    "load_agent",
     "run_episodes",
+    "summary_table",
     "wilson_interval",
 ]
 
@@ -54,138 +51,6 @@ def wilson_interval(successes: int, n: int, z: float = 1.96) -> tuple[float, flo
     centre = (p + z * z / (2 * n)) / (1 + z * z / n)
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
     return max(centre - half, 0.0), min(centre + half, 1.0)
-
-
-class RandomAgent:
-    """Uniform random actions from a seeded action space."""
-
-    name = "random"
-
-    def __init__(self, env: gym.Env[Any, Any], seed: int = 0) -> None:
-        self.action_space = env.action_space
-        self.action_space.seed(seed)
-
-    def reset(self) -> None:
-        """Random actions keep no memory."""
-
-    def predict(
-        self,
-        observation: Any,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[NDArray[np.float32], Any]:
-        return np.asarray(self.action_space.sample(), np.float32), state
-
-
-class LearnedAgent:
-    """A stable-baselines3 model with the observation normalisation it trained with."""
-
-    def __init__(self, model: Any, normalizer: Any | None, name: str) -> None:
-        self.model, self.normalizer, self.name = model, normalizer, name
-
-    def reset(self) -> None:
-        """MLP policies keep no memory."""
-
-    def predict(
-        self,
-        observation: Any,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[NDArray[np.float32], Any]:
-        if self.normalizer is not None:
-            observation = self.normalizer.normalize_obs(observation)
-        action, state = self.model.predict(observation, state, episode_start, deterministic)
-        return np.asarray(action, np.float32), state
-
-
-@dataclass(frozen=True)
-class AgentSpec:
-    """What an agent spec resolves to: a label, how to build the agent for an
-    environment, and the environment it needs (``home``: the id it was written or
-    trained for, None for any) with its ``gym.make`` arguments and wrapper."""
-
-    label: str
-    build: Callable[[gym.Env[Any, Any]], Any]
-    home: str | None = None
-    env_kwargs: dict[str, Any] = field(default_factory=dict)
-    wrapper: str = ""
-    kind: str = "scripted"
-
-
-def load_agent(spec: str, seed: int = 0) -> AgentSpec:
-    """Resolve ``scripted:NAME``, ``random`` or a model path (see the module doc).
-
-    Raises:
-        ValueError: an unknown strategy or an unreadable model.
-        FileNotFoundError: no such model file or run folder.
-    """
-    if spec == "random":
-        return AgentSpec("random", lambda env: RandomAgent(env, seed), kind="random")
-    if spec.startswith("scripted:"):
-        from agents.scripted import STRATEGIES
-
-        name = spec.removeprefix("scripted:")
-        if name not in STRATEGIES:
-            raise ValueError(
-                f"unknown scripted strategy {name!r}; expected one of {list(STRATEGIES)}"
-            )
-        strategy = STRATEGIES[name]
-        return AgentSpec(
-            name, strategy.agent, strategy.env_id, dict(strategy.env_kwargs), kind="scripted"
-        )
-    return _load_learned(Path(spec))
-
-
-def _load_learned(path: Path) -> AgentSpec:
-    if path.is_dir():
-        for candidate in ("best_model.zip", "model.zip", "policy.pt"):
-            if (path / candidate).is_file():
-                path = path / candidate
-                break
-        else:
-            raise FileNotFoundError(f"no best_model.zip, model.zip or policy.pt in {path}")
-    if not path.is_file():
-        raise FileNotFoundError(
-            f"no model file {path} (agents are scripted:NAME, random, or a model path)"
-        )
-    folder = path.parent
-    run: dict[str, Any] = {}
-    if (folder / "run.json").is_file():
-        run = json.loads((folder / "run.json").read_text())
-    from agents.hyperparams import ALGOS, algorithm
-
-    algos = [run["algo"]] if "algo" in run else list(ALGOS)
-    settings = run.get("hyperparams", {})
-    model = None
-    for algo in algos:
-        cls = algorithm(algo)
-        try:
-            if path.suffix == ".pt":  # a policy alone (see agents/policies/README.md)
-                policy_cls = cls.policy_aliases[settings.get("policy", "MlpPolicy")]
-                model = policy_cls.load(path, device="cpu")
-            else:
-                model = cls.load(path, device="cpu")
-            break
-        except Exception:  # SB3 raises many kinds of error on a wrong file
-            continue
-    if model is None:
-        raise ValueError(f"{path} is not a stable-baselines3 {' or '.join(algos).upper()} model")
-    normalizer = None
-    if (folder / "vecnormalize.pkl").is_file():
-        with (folder / "vecnormalize.pkl").open("rb") as f:
-            normalizer = pickle.load(f)
-        normalizer.training = False
-    label = f"{run.get('algo', type(model).__name__.lower()).upper()} ({folder.name})"
-    return AgentSpec(
-        label,
-        lambda env: LearnedAgent(model, normalizer, label),
-        home=run.get("env_id"),
-        env_kwargs=dict(settings.get("env_kwargs", {})),
-        wrapper=settings.get("env_wrapper", ""),
-        kind=run.get("algo", "learned").upper(),
-    )
 
 
 @dataclass(frozen=True)
@@ -263,8 +128,6 @@ def evaluate(
 ) -> Evaluation:
     """Play one episode per seed; see the module docstring for what is measured.
     ``video`` (``.mp4`` or ``.gif``) records the first episode's top-down view."""
-    from agents.train import make_env
-
     kwargs = dict(agent.env_kwargs)
     if config is not None:
         kwargs["config"] = str(config)
@@ -284,8 +147,6 @@ def evaluate(
             frames: list[NDArray[np.uint8]] | None = [] if video is not None and i == 0 else None
             episodes.append(_episode(env, policy, seed, frames))
             if frames and video is not None:
-                from graspenv.viz import write_animation
-
                 bgr = [np.ascontiguousarray(f[..., ::-1]) for f in frames]
                 write_animation(bgr, video, float(env.metadata.get("render_fps", 30)))
             if progress is not None:

@@ -10,7 +10,7 @@ algorithm's own constructor arguments plus these run settings:
 - ``n_envs``: environments stepped in parallel (``0``: one per available core);
 - ``normalize``: wrap the environments in ``VecNormalize`` (observations and rewards);
 - ``env_kwargs``: keyword arguments for ``gym.make``;
-- ``env_wrapper``: a name from :data:`agents.wrappers.WRAPPERS`;
+- ``env_wrapper``: a name from :data:`graspenv_agents.wrappers.WRAPPERS`;
 - ``eval_freq``, ``eval_episodes``: periodic deterministic evaluation (steps, episodes);
 - ``checkpoint_freq``: steps between saved checkpoints;
 - ``torch_threads``: threads torch may use (1 keeps the cores for the environments);
@@ -60,6 +60,8 @@ def algorithm(algo: str) -> Any:
     """The stable-baselines3 class for ``ppo`` or ``sac``."""
     if algo not in ALGOS:
         raise ValueError(f"unknown algorithm {algo!r}; expected one of {list(ALGOS)}")
+    # Here, not at the top: `graspenv eval` of a scripted strategy, and every other
+    # `graspenv` command, imports this module and should not load stable-baselines3.
     from stable_baselines3 import PPO, SAC
 
     return {"ppo": PPO, "sac": SAC}[algo]
@@ -129,7 +131,7 @@ def algorithm_kwargs(settings: dict[str, Any]) -> dict[str, Any]:
     kwargs = {k: v for k, v in settings.items() if k not in RUN_KEYS}
     policy_kwargs = dict(kwargs.get("policy_kwargs", {}))
     if "activation_fn" in policy_kwargs:
-        import torch
+        import torch  # here for the same reason as in `algorithm`
 
         names = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU, "elu": torch.nn.ELU}
         names["leaky_relu"] = torch.nn.LeakyReLU
@@ -137,7 +139,7 @@ def algorithm_kwargs(settings: dict[str, Any]) -> dict[str, Any]:
     if policy_kwargs:
         kwargs["policy_kwargs"] = policy_kwargs
     if kwargs.get("replay_buffer_class") == "HerReplayBuffer":
-        from stable_baselines3 import HerReplayBuffer
+        from stable_baselines3 import HerReplayBuffer  # as in `algorithm`
 
         kwargs["replay_buffer_class"] = HerReplayBuffer
     return kwargs

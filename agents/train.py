@@ -6,7 +6,8 @@ A run folder records everything needed to reproduce and to use the result:
   command, package versions, the git commit, wall time and steps;
 - ``model.zip`` (final) and ``best_model.zip`` (best periodic evaluation), with
   ``vecnormalize.pkl`` when observations are normalised;
-- ``checkpoints/``, ``progress.csv`` (every logged value), ``tb/`` (TensorBoard);
+- ``checkpoints/``, ``progress.csv`` (every logged value), ``tb/`` (the same values
+  as TensorBoard event files, from stable-baselines3's logger);
 - ``evaluations.csv`` and ``learning_curve.png``: periodic deterministic
   evaluation (success rate and return against training steps).
 """
@@ -14,6 +15,7 @@ A run folder records everything needed to reproduce and to use the result:
 from __future__ import annotations
 
 import functools
+import importlib.util
 import json
 import os
 import platform
@@ -26,13 +28,23 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
-from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
+import torch
+from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback, EvalCallback
+from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
+from stable_baselines3.common.logger import Logger, make_output_format
+from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
 
-from agents.hyperparams import algorithm, algorithm_kwargs, load_hyperparams
+from graspenv.plots import line_chart
 
-__all__ = ["TrainResult", "check_env_id", "make_env", "make_vec_env", "train"]
+from .hyperparams import algorithm, algorithm_kwargs, load_hyperparams
+from .loading import check_env_id, load_agent, make_env
+
+__all__ = ["TrainResult", "make_vec_env", "train"]
+
+#: What stable-baselines3 needs for the TensorBoard logs and the progress bar (the
+#: training extra), which it imports only once asked for them.
+LOGGING_PACKAGES = ("tensorboard", "tqdm", "rich")
 
 PACKAGES = (
     "graspenv",
@@ -45,29 +57,6 @@ PACKAGES = (
 )
 
 
-def check_env_id(env_id: str) -> None:
-    """``ValueError`` naming the registered ids unless ``env_id`` is one of them."""
-    import graspenv
-
-    if env_id not in graspenv.ENV_IDS:
-        raise ValueError(
-            f"unknown environment {env_id!r}; expected one of {list(graspenv.ENV_IDS)}"
-        )
-
-
-def make_env(env_id: str, env_kwargs: dict[str, Any], wrapper: str) -> gym.Env[Any, Any]:
-    """One environment as training sees it (picklable for subprocess workers)."""
-    from agents.wrappers import WRAPPERS
-
-    check_env_id(env_id)
-    env = gym.make(env_id, **env_kwargs)
-    if wrapper:
-        if wrapper not in WRAPPERS:
-            raise ValueError(f"unknown env_wrapper {wrapper!r}; expected one of {list(WRAPPERS)}")
-        env = WRAPPERS[wrapper](env)
-    return env
-
-
 def make_vec_env(
     env_id: str,
     settings: dict[str, Any],
@@ -76,9 +65,6 @@ def make_vec_env(
     monitor_dir: Path | None = None,
 ) -> Any:
     """``n_envs`` monitored environments (subprocesses when more than one)."""
-    from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
-    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
-
     factory = functools.partial(
         make_env, env_id, dict(settings["env_kwargs"]), settings["env_wrapper"]
     )
@@ -151,6 +137,7 @@ def train(
     steps: int | None = None,
     n_envs: int | None = None,
     progress: Callable[[str], None] | None = None,
+    progress_bar: bool = True,
 ) -> TrainResult:
     """Train and evaluate one agent; see the module docstring for the run folder.
 
@@ -161,9 +148,16 @@ def train(
         config: hyperparameter file (default ``agents/hyperparams/<algo>.toml``).
         out: parent of the run folder.
         steps, n_envs: override the file's ``n_timesteps`` and ``n_envs``.
-        progress: receives a progress line now and then (default: stderr).
+        progress: receives the status lines before training starts (default: stderr).
+        progress_bar: show stable-baselines3's progress bar (tqdm and rich) while
+            training; what training logs goes to ``progress.csv`` and ``tb/``.
     """
     check_env_id(env_id)
+    for name in LOGGING_PACKAGES:
+        # Without them stable-baselines3 stops on an assertion once training is under
+        # way; the `graspenv` command turns this error into "install the training extra".
+        if importlib.util.find_spec(name) is None:
+            raise ModuleNotFoundError(f"no module named {name!r}", name=name)
     settings = load_hyperparams(env_id, algo, config)
     if steps is not None:
         settings["n_timesteps"] = steps
@@ -174,13 +168,6 @@ def train(
     if settings["n_timesteps"] < 1 or settings["n_envs"] < 1:
         raise ValueError("n_timesteps and n_envs must be positive")
     make_env(env_id, settings["env_kwargs"], settings["env_wrapper"]).close()  # fail early
-
-    import torch
-    from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback
-    from stable_baselines3.common.logger import CSVOutputFormat, Logger
-    from stable_baselines3.common.vec_env import VecNormalize
-
-    from agents.tensorboard import TensorBoardOutput
 
     torch.set_num_threads(settings["torch_threads"])
     folder = run_folder(Path(out), env_id, algo, seed)
@@ -219,7 +206,10 @@ def train(
     model.set_logger(
         Logger(
             str(folder),
-            [CSVOutputFormat(str(folder / "progress.csv")), TensorBoardOutput(folder / "tb")],
+            [
+                make_output_format("csv", str(folder)),
+                make_output_format("tensorboard", str(folder / "tb")),
+            ],
         )
     )
     evaluation = EvalCallback(
@@ -240,15 +230,15 @@ def train(
                 name_prefix="model",
                 save_vecnormalize=True,
             ),
-            ProgressCallback(settings["n_timesteps"], evaluation, progress),
         ]
     )
     start = time.perf_counter()
     try:
-        model.learn(settings["n_timesteps"], callback=callbacks)
+        model.learn(settings["n_timesteps"], callback=callbacks, progress_bar=progress_bar)
     finally:
         envs.close()
         eval_env.close()
+        model.logger.close()
     wall = time.perf_counter() - start
     model.save(folder / "model.zip")
     if settings["normalize"]:
@@ -269,8 +259,6 @@ def prefill(model: Any, env_id: str, settings: dict[str, Any], first_seed: int) 
     """Play ``demo_episodes`` episodes of the scripted strategy and add every
     transition to the model's replay buffer (what the policy will see: the same
     environment arguments and wrapper)."""
-    from agents.evaluate import load_agent
-
     spec = load_agent(settings["demonstrations"])
     env = make_env(env_id, settings["env_kwargs"], settings["env_wrapper"])
     agent = spec.build(env)
@@ -310,8 +298,6 @@ def _write_json(path: Path, data: dict[str, Any]) -> None:
 def write_learning_curve(folder: Path, env_id: str, algo: str) -> list[tuple[int, float, float]]:
     """``evaluations.csv`` and ``learning_curve.png`` from the periodic evaluations
     (steps, mean return, success rate)."""
-    from graspenv.plots import line_chart
-
     path = folder / "evaluations.npz"
     if not path.is_file():
         return []
@@ -334,43 +320,6 @@ def write_learning_curve(folder: Path, env_id: str, algo: str) -> list[tuple[int
         ylim=(0.0, 1.0),
     )
     return rows
-
-
-class ProgressCallback(BaseCallback):
-    """Reports steps, speed, time left and the last evaluation every ~2 %."""
-
-    def __init__(
-        self, total: int, evaluation: EvalCallback, report: Callable[[str], None] | None
-    ) -> None:
-        super().__init__()
-        self.total, self.evaluation, self.report = total, evaluation, report or _stderr
-        self.start, self.next = 0.0, 0
-
-    def _on_training_start(self) -> None:
-        self.start = time.perf_counter()
-
-    def _on_step(self) -> bool:
-        if self.num_timesteps >= self.next:
-            self.next = self.num_timesteps + max(self.total // 50, 1)
-            self._report()
-        return True
-
-    def _on_training_end(self) -> None:
-        self._report()
-
-    def _report(self) -> None:
-        done, total = self.num_timesteps, self.total
-        elapsed = time.perf_counter() - self.start
-        rate = done / max(elapsed, 1e-9)
-        left = max(total - done, 0) / max(rate, 1e-9)
-        line = (
-            f"[{done}/{total}] {min(100 * done / total, 100):.0f}% · {rate:.0f} steps/s · "
-            f"{elapsed / 60:.1f} min elapsed, {left / 60:.1f} min left"
-        )
-        successes = self.evaluation.evaluations_successes
-        if successes:
-            line += f" · last eval success {np.mean(successes[-1]):.0%}"
-        self.report(line)
 
 
 def _stderr(line: str) -> None:

@@ -2,8 +2,9 @@
 
 Sub-commands live in a table, one function and one line each. Commands from other
 packages join through the ``graspenv.commands`` entry-point group (an ``add``
-function taking the sub-parser table): that is how the repository's ``agents``
-package adds ``train``, ``eval`` and ``compare`` without graspenv importing it.
+function taking the sub-parser table): that is how the repository's agents
+(``agents/``, installed as ``graspenv_agents``) add ``train``, ``eval`` and
+``compare`` without graspenv importing them.
 Errors a user can cause end with a one-line message and exit status 2, not a
 traceback.
 """

@@ -11,10 +11,10 @@ from __future__ import annotations
 
 from typing import Any, NamedTuple
 
-from agents.scripted.base import ScriptedAgent
-from agents.scripted.grip import PinchAndTurn, SqueezeAndSlide
-from agents.scripted.hold_catch import CupAndCatch, FirmHold
-from agents.scripted.push import PushFromBehind, RubFromTop
+from .base import ScriptedAgent
+from .grip import PinchAndTurn, SqueezeAndSlide
+from .hold_catch import CupAndCatch, FirmHold
+from .push import PushFromBehind, RubFromTop
 
 __all__ = ["STRATEGIES", "ScriptedAgent", "Strategy"]
 

@@ -13,7 +13,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from agents.scripted.base import ScriptedAgent, State, squeeze_rate
+from .base import ScriptedAgent, State, squeeze_rate
 
 __all__ = ["CupAndCatch", "FirmHold"]
 

@@ -12,7 +12,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from agents.scripted.base import ScriptedAgent, State
+from .base import ScriptedAgent, State
 
 __all__ = ["PushFromBehind", "RubFromTop"]
 

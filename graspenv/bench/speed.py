@@ -10,8 +10,8 @@ Headline figures are wall clocks of whole runs, what a user sees:
   ``stepSimulation`` over that wall time. A per-stage breakdown (the minimum of each
   frame's stage times over the runs) is given beside it, and says so.
 - **Environments.** Every environment's steps per second with its scripted agent
-  (the ``graspenv.strategies`` entry points; the repository's ``agents`` package
-  registers them) and with seeded random actions, beside panda-gym's
+  (the ``graspenv.strategies`` entry points; the repository's agents, installed as
+  ``graspenv_agents``, register them) and with seeded random actions, beside panda-gym's
   ``PandaPickAndPlace-v3`` (random actions, state observations; the PyBullet peer a
   user would pick) measured in the same process before and after, so that each ratio
   comes from one run on one machine. Resets are timed on their own.

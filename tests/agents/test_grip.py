@@ -6,8 +6,8 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from agents.evaluate import run_episodes
-from agents.scripted.grip import PinchAndTurn, SqueezeAndSlide
+from graspenv_agents.evaluate import run_episodes
+from graspenv_agents.scripted.grip import PinchAndTurn, SqueezeAndSlide
 
 HELD_OUT = range(100, 110)
 
@@ -21,6 +21,7 @@ def test_success_rate(env_id: str, agent: type) -> None:
 
 
 def test_predict_works_like_an_sb3_model_on_a_vec_env() -> None:
+    pytest.importorskip("stable_baselines3")
     from stable_baselines3.common.env_util import make_vec_env
 
     envs = make_vec_env("graspenv/TurnInPlace-v0", n_envs=1, seed=0)

@@ -15,8 +15,8 @@ import gymnasium as gym
 import numpy as np
 
 import graspenv  # noqa: F401  (registers the environments)
-from agents.scripted.base import ScriptedAgent
-from agents.scripted.hold_catch import CupAndCatch, FirmHold
+from graspenv_agents.scripted.base import ScriptedAgent
+from graspenv_agents.scripted.hold_catch import CupAndCatch, FirmHold
 
 # Seeds 100-109: the strategies were tuned on seeds 0-39.
 SEEDS = range(100, 110)

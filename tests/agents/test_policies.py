@@ -7,8 +7,11 @@ from pathlib import Path
 
 import pytest
 
-from agents.compare import POLICIES
-from agents.evaluate import evaluate, load_agent
+from graspenv_agents.compare import POLICIES
+from graspenv_agents.evaluate import evaluate
+from graspenv_agents.loading import load_agent
+
+pytest.importorskip("stable_baselines3")  # the policies are stable-baselines3 models
 
 FOLDERS = sorted(p for p in POLICIES.iterdir() if (p / "run.json").is_file())
 
@@ -31,7 +34,7 @@ def test_policy_is_small_and_plays_its_task(folder: Path) -> None:
 def test_compare_runs_the_learned_policies_in_parallel(tmp_path: Path) -> None:
     """Loading a policy imports torch before the worker pool starts: forked workers
     hung here; the pool now spawns them."""
-    from agents.compare import compare
+    from graspenv_agents.compare import compare
 
     result = compare(None, [str(p) for p in FOLDERS], 1, 1000, tmp_path, workers=2)
     assert {s["agent"] for s in result.summaries} == {f"SAC ({p.name})" for p in FOLDERS}

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 import graspenv  # noqa: F401  (registers the environments)
-from agents.evaluate import run_episodes
-from agents.scripted.base import ScriptedAgent
-from agents.scripted.push import PushFromBehind, RubFromTop
+from graspenv_agents.evaluate import run_episodes
+from graspenv_agents.scripted.base import ScriptedAgent
+from graspenv_agents.scripted.push import PushFromBehind, RubFromTop
 
 # Seeds 100-109: the strategies were tuned on seeds 0-99.
 SEEDS = range(100, 110)

@@ -44,6 +44,7 @@ def test_gymnasium_checker_passes_without_warnings(env_id: str, obs_mode: str) -
 @pytest.mark.parametrize("obs_mode", OBS_MODES)
 @pytest.mark.parametrize("env_id", graspenv.ENV_IDS)
 def test_sb3_checker_passes_without_warnings(env_id: str, obs_mode: str) -> None:
+    pytest.importorskip("stable_baselines3")
     from stable_baselines3.common.env_checker import check_env
 
     env = _make(env_id, obs_mode=obs_mode)
@@ -221,6 +222,7 @@ def test_make_vec(vectorization_mode: str) -> None:
 
 
 def test_sb3_subproc_vec_env() -> None:
+    pytest.importorskip("stable_baselines3")
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import SubprocVecEnv
 

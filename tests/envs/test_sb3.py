@@ -13,6 +13,7 @@ import graspenv
 @pytest.mark.parametrize("algo", ["ppo", "sac"])
 @pytest.mark.parametrize("env_id", graspenv.ENV_IDS)
 def test_a_few_learning_steps(env_id: str, algo: str) -> None:
+    pytest.importorskip("stable_baselines3")
     from stable_baselines3 import PPO, SAC
 
     env = gym.make(env_id)
@@ -30,6 +31,7 @@ def test_a_few_learning_steps(env_id: str, algo: str) -> None:
 
 
 def test_her_with_the_goal_mode() -> None:
+    pytest.importorskip("stable_baselines3")
     from stable_baselines3 import SAC, HerReplayBuffer
 
     # HER samples only from finished episodes: SqueezeHold's last 70 steps.
@@ -51,6 +53,7 @@ def test_her_with_the_goal_mode() -> None:
 
 
 def test_cnn_policy_on_masks() -> None:
+    pytest.importorskip("stable_baselines3")
     from stable_baselines3 import PPO
 
     env = gym.make("graspenv/TurnInPlace-v0", obs_mode="mask")

@@ -1,0 +1,192 @@
+"""Names into things: an environment id into an environment, an agent spec into an agent.
+
+Training, evaluation and comparison all start here, so that none of them has to
+import another to build what it plays. An agent is named by a spec:
+
+- ``scripted:NAME``: a strategy from :data:`graspenv_agents.scripted.STRATEGIES`;
+- ``random``: uniform random actions (seeded);
+- a path: a stable-baselines3 model (``.zip``) or a ``graspenv train`` run folder
+  (its ``best_model.zip``, else ``model.zip``, else a trimmed ``policy.pt``). The
+  run's ``run.json`` supplies the algorithm and the environment arguments and
+  wrapper it was trained with, and its ``vecnormalize.pkl`` the observation
+  normalisation.
+
+Nothing here imports stable-baselines3 or torch until a learned model is loaded
+(:func:`graspenv_agents.hyperparams.algorithm` does), so ``graspenv eval`` of a
+scripted strategy never pays for them.
+"""
+
+from __future__ import annotations
+
+import json
+import pickle
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from numpy.typing import NDArray
+
+import graspenv
+
+from .hyperparams import ALGOS, algorithm
+from .scripted import STRATEGIES
+from .wrappers import WRAPPERS
+
+__all__ = [
+    "AgentSpec",
+    "LearnedAgent",
+    "RandomAgent",
+    "check_env_id",
+    "load_agent",
+    "make_env",
+]
+
+
+def check_env_id(env_id: str) -> None:
+    """``ValueError`` naming the registered ids unless ``env_id`` is one of them."""
+    if env_id not in graspenv.ENV_IDS:
+        raise ValueError(
+            f"unknown environment {env_id!r}; expected one of {list(graspenv.ENV_IDS)}"
+        )
+
+
+def make_env(env_id: str, env_kwargs: dict[str, Any], wrapper: str) -> gym.Env[Any, Any]:
+    """One environment as training and evaluation see it: ``gym.make`` with
+    ``env_kwargs``, then the observation wrapper named ``wrapper`` (``""``: none).
+    Picklable by reference, for subprocess workers."""
+    check_env_id(env_id)
+    if wrapper and wrapper not in WRAPPERS:
+        raise ValueError(f"unknown env_wrapper {wrapper!r}; expected one of {list(WRAPPERS)}")
+    env = gym.make(env_id, **env_kwargs)
+    return WRAPPERS[wrapper](env) if wrapper else env
+
+
+class RandomAgent:
+    """Uniform random actions from a seeded action space."""
+
+    name = "random"
+
+    def __init__(self, env: gym.Env[Any, Any], seed: int = 0) -> None:
+        self.action_space = env.action_space
+        self.action_space.seed(seed)
+
+    def reset(self) -> None:
+        """Random actions keep no memory."""
+
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[NDArray[np.float32], Any]:
+        return np.asarray(self.action_space.sample(), np.float32), state
+
+
+class LearnedAgent:
+    """A stable-baselines3 model with the observation normalisation it trained with."""
+
+    def __init__(self, model: Any, normalizer: Any | None, name: str) -> None:
+        self.model, self.normalizer, self.name = model, normalizer, name
+
+    def reset(self) -> None:
+        """MLP policies keep no memory."""
+
+    def predict(
+        self,
+        observation: Any,
+        state: Any = None,
+        episode_start: Any = None,
+        deterministic: bool = True,
+    ) -> tuple[NDArray[np.float32], Any]:
+        if self.normalizer is not None:
+            observation = self.normalizer.normalize_obs(observation)
+        action, state = self.model.predict(observation, state, episode_start, deterministic)
+        return np.asarray(action, np.float32), state
+
+
+@dataclass(frozen=True)
+class AgentSpec:
+    """What an agent spec resolves to: a label, how to build the agent for an
+    environment, and the environment it needs (``home``: the id it was written or
+    trained for, None for any) with its ``gym.make`` arguments and wrapper."""
+
+    label: str
+    build: Callable[[gym.Env[Any, Any]], Any]
+    home: str | None = None
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
+    wrapper: str = ""
+    kind: str = "scripted"
+
+
+def load_agent(spec: str, seed: int = 0) -> AgentSpec:
+    """Resolve ``scripted:NAME``, ``random`` or a model path (see the module doc).
+
+    Raises:
+        ValueError: an unknown strategy or an unreadable model.
+        FileNotFoundError: no such model file or run folder.
+    """
+    if spec == "random":
+        return AgentSpec("random", lambda env: RandomAgent(env, seed), kind="random")
+    if spec.startswith("scripted:"):
+        name = spec.removeprefix("scripted:")
+        if name not in STRATEGIES:
+            raise ValueError(
+                f"unknown scripted strategy {name!r}; expected one of {list(STRATEGIES)}"
+            )
+        strategy = STRATEGIES[name]
+        return AgentSpec(
+            name, strategy.agent, strategy.env_id, dict(strategy.env_kwargs), kind="scripted"
+        )
+    return _load_learned(Path(spec))
+
+
+def _load_learned(path: Path) -> AgentSpec:
+    if path.is_dir():
+        for candidate in ("best_model.zip", "model.zip", "policy.pt"):
+            if (path / candidate).is_file():
+                path = path / candidate
+                break
+        else:
+            raise FileNotFoundError(f"no best_model.zip, model.zip or policy.pt in {path}")
+    if not path.is_file():
+        raise FileNotFoundError(
+            f"no model file {path} (agents are scripted:NAME, random, or a model path)"
+        )
+    folder = path.parent
+    run: dict[str, Any] = {}
+    if (folder / "run.json").is_file():
+        run = json.loads((folder / "run.json").read_text())
+    algos = [run["algo"]] if "algo" in run else list(ALGOS)
+    settings = run.get("hyperparams", {})
+    model = None
+    for algo in algos:
+        cls = algorithm(algo)
+        try:
+            if path.suffix == ".pt":  # a policy alone (see agents/policies/README.md)
+                policy_cls = cls.policy_aliases[settings.get("policy", "MlpPolicy")]
+                model = policy_cls.load(path, device="cpu")
+            else:
+                model = cls.load(path, device="cpu")
+            break
+        except Exception:  # SB3 raises many kinds of error on a wrong file
+            continue
+    if model is None:
+        raise ValueError(f"{path} is not a stable-baselines3 {' or '.join(algos).upper()} model")
+    normalizer = None
+    if (folder / "vecnormalize.pkl").is_file():
+        with (folder / "vecnormalize.pkl").open("rb") as f:
+            normalizer = pickle.load(f)
+        normalizer.training = False
+    label = f"{run.get('algo', type(model).__name__.lower()).upper()} ({folder.name})"
+    return AgentSpec(
+        label,
+        lambda env: LearnedAgent(model, normalizer, label),
+        home=run.get("env_id"),
+        env_kwargs=dict(settings.get("env_kwargs", {})),
+        wrapper=settings.get("env_wrapper", ""),
+        kind=run.get("algo", "learned").upper(),
+    )

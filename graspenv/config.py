@@ -36,6 +36,7 @@ __all__ = [
     "build_section",
     "choose_fidelity",
     "load_config",
+    "read_config",
     "read_config_file",
     "resolve_fidelity",
     "scene_from",
@@ -576,6 +577,21 @@ def read_config_file(path: str | Path) -> dict[str, Any]:
     return data
 
 
+def read_config(config: str | Path | Mapping[str, Any] | None) -> tuple[dict[str, Any], str]:
+    """The tables of a configuration file, a dict or the built-in default (none),
+    and the name errors give it: the path, ``<dict>`` or ``<default>``.
+
+    Raises:
+        FileNotFoundError: no such file.
+        ConfigError: the file cannot be parsed (naming the file).
+    """
+    if config is None:
+        return {}, "<default>"
+    if isinstance(config, Mapping):
+        return dict(config), "<dict>"
+    return read_config_file(config), str(config)
+
+
 def build_section(
     cls: type[T], data: Mapping[str, Any] | None, prefix: str, source: str, defaults: T
 ) -> T:
@@ -615,18 +631,10 @@ def load_config(
             message names the key and the file.
         FileNotFoundError: the path does not exist.
     """
-    source = "<dict>"
-    if config is None:
-        data: dict[str, Any] = {}
-        source = "<default>"
-    elif isinstance(config, SceneConfig):
-        data = to_dict(config)
-        source = "<SceneConfig>"
-    elif isinstance(config, Mapping):
-        data = dict(config)
+    if isinstance(config, SceneConfig):
+        data, source = to_dict(config), "<SceneConfig>"
     else:
-        source = str(config)
-        data = read_config_file(config)
+        data, source = read_config(config)
     if overrides:
         data = _merge(data, overrides)
     return _build(SceneConfig, data, "", source)

@@ -57,7 +57,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.bench.interactions import FINGER_RADIUS, pinch, with_objects
-from graspenv.bench.jobs import run_jobs
+from graspenv.bench.jobs import collect_jobs
 from graspenv.bench.playback import Played, play
 from graspenv.bench.results import write_rows
 from graspenv.bench.scenarios import push_until_slip
@@ -366,23 +366,19 @@ def run_grid(
         raise ValueError(f"workers must be at least 1, got {workers}")
     base_scene(config, preset)  # a bad file or preset fails here, not in a worker
     jobs = [(cell, name, config, preset) for cell, name in grid_jobs(maps, seed)]
-    results: list[CellResult] = []
+    return collect_jobs(_measure, jobs, workers, progress, _describe)
 
-    def note(result: CellResult) -> None:
-        results.append(result)
-        if progress is not None:
-            c = result.cell
-            progress(
-                f"[{len(results)}/{len(jobs)}] {result.map}: {c.shape} {100 * c.footprint:g} cm"
-                f" x {100 * c.height:g} cm, {1000 * c.mass:g} g, mu {c.friction:g},"
-                f" depth {1000 * c.depth:g} mm, finger {1000 * c.finger_radius:g} mm:"
-                f" turn {result.turn_error_deg:+.2f} deg, slide {result.slide_error_pct:.2f} %,"
-                f" slip {result.slip_error_pct:+.1f} %, margins {result.turn_margin:.1f}"
-                f"/{result.slide_margin:.1f}"
-            )
 
-    run_jobs(_measure, jobs, workers, note)
-    return results
+def _describe(result: CellResult) -> str:
+    c = result.cell
+    return (
+        f"{result.map}: {c.shape} {100 * c.footprint:g} cm"
+        f" x {100 * c.height:g} cm, {1000 * c.mass:g} g, mu {c.friction:g},"
+        f" depth {1000 * c.depth:g} mm, finger {1000 * c.finger_radius:g} mm:"
+        f" turn {result.turn_error_deg:+.2f} deg, slide {result.slide_error_pct:.2f} %,"
+        f" slip {result.slip_error_pct:+.1f} %, margins {result.turn_margin:.1f}"
+        f"/{result.slide_margin:.1f}"
+    )
 
 
 # -- outputs --------------------------------------------------------------------------

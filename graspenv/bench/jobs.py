@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from typing import TypeVar
 
-__all__ = ["run_jobs"]
+__all__ = ["collect_jobs", "run_jobs"]
 
 J = TypeVar("J")
 R = TypeVar("R")
@@ -34,3 +34,23 @@ def run_jobs(
     with ProcessPoolExecutor(workers) as pool:
         for result in pool.map(work, jobs, chunksize=chunksize):
             each(result)
+
+
+def collect_jobs(
+    work: Callable[[J], R],
+    jobs: Sequence[J],
+    workers: int,
+    progress: Callable[[str], None] | None,
+    describe: Callable[[R], str],
+) -> list[R]:
+    """:func:`run_jobs`, the results in a list; ``progress`` (if given) gets a line
+    ``[done/total] describe(result)`` as each result comes."""
+    results: list[R] = []
+
+    def note(result: R) -> None:
+        results.append(result)
+        if progress is not None:
+            progress(f"[{len(results)}/{len(jobs)}] {describe(result)}")
+
+    run_jobs(work, jobs, workers, note)
+    return results

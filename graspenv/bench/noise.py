@@ -41,7 +41,7 @@ from graspenv.bench.grid import (
     grasp_run,
     placed,
 )
-from graspenv.bench.jobs import run_jobs
+from graspenv.bench.jobs import collect_jobs
 from graspenv.bench.results import write_rows
 from graspenv.plots import line_chart, write_png
 from graspenv.surface.noise import TABLE_NOISE, SensorNoise
@@ -171,21 +171,17 @@ def run_noise(
     ``preset``."""
     base_scene(config, preset)  # a bad file or preset fails here, not in a worker
     jobs = _jobs(cells, config, preset)
-    runs: list[NoiseRun] = []
+    return collect_jobs(measure, jobs, workers, progress, _describe)
 
-    def note(run: NoiseRun) -> None:
-        runs.append(run)
-        if progress is not None:
-            c = run.cell
-            progress(
-                f"[{len(runs)}/{len(jobs)}] {run.level}, {run.cleanup}: {c.shape}"
-                f" {100 * c.footprint:g} x {100 * c.height:g} cm {1000 * c.mass:g} g,"
-                f" seed {run.seed}: turn {run.turn_error_deg:+.2f} deg,"
-                f" slide {run.slide_error_pct:.2f} %{' DROPPED' if run.dropped else ''}"
-            )
 
-    run_jobs(measure, jobs, workers, note)
-    return runs
+def _describe(run: NoiseRun) -> str:
+    c = run.cell
+    return (
+        f"{run.level}, {run.cleanup}: {c.shape}"
+        f" {100 * c.footprint:g} x {100 * c.height:g} cm {1000 * c.mass:g} g,"
+        f" seed {run.seed}: turn {run.turn_error_deg:+.2f} deg,"
+        f" slide {run.slide_error_pct:.2f} %{' DROPPED' if run.dropped else ''}"
+    )
 
 
 def _worst(runs: Sequence[NoiseRun], level: str, cleanup: str) -> tuple[float, float, int, int]:

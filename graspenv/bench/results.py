@@ -200,27 +200,34 @@ def pareto_png(results: Sequence[Result], path: Path) -> Path:
     drift = [
         float(np.nanmean([r.reference_drift_mm for r in results if r.setting == s])) for s in kept
     ]
-    top = pareto_chart(
-        kept,
-        list(zip(speed, yaw, strict=True)),
-        None,
-        "Canonical turn: speed against error (front joined)",
-        "x real time (60 Hz camera), log scale",
-        "|yaw error| (deg), log scale",
-        log_error=True,
-        labelled=PRESET_LABELS,
-    )
-    bottom = pareto_chart(
-        kept,
-        list(zip(speed, drift, strict=True)),
-        None,
-        "Every scenario: drift of final poses against the reference fidelity",
-        "x real time of the canonical turn, log scale",
-        "mean drift (mm), log scale",
-        log_error=True,
-        labelled=PRESET_LABELS,
-    )
-    return write_png(np.vstack([top, bottom]), path)
+    panels = [
+        (
+            yaw,
+            "Canonical turn: speed against error (front joined)",
+            "x real time (60 Hz camera), log scale",
+            "|yaw error| (deg), log scale",
+        ),
+        (
+            drift,
+            "Every scenario: drift of final poses against the reference fidelity",
+            "x real time of the canonical turn, log scale",
+            "mean drift (mm), log scale",
+        ),
+    ]
+    images = [
+        pareto_chart(
+            kept,
+            list(zip(speed, error, strict=True)),
+            None,
+            title,
+            x_label,
+            y_label,
+            log_error=True,
+            labelled=PRESET_LABELS,
+        )
+        for error, title, x_label, y_label in panels
+    ]
+    return write_png(np.vstack(images), path)
 
 
 def write_outputs(results: Sequence[Result], out: Path) -> list[Path]:

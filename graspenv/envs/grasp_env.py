@@ -28,7 +28,7 @@ from graspenv.config import (
     SceneConfig,
     SurfaceConfig,
     build_section,
-    read_config_file,
+    read_config,
     resolve_fidelity,
     scene_from,
 )
@@ -67,15 +67,7 @@ def load_env_config(
         ConfigError: unknown keys or bad values, naming the key and the file.
         FileNotFoundError: the file does not exist.
     """
-    if config is None:
-        data: dict[str, Any] = {}
-        source = "<default>"
-    elif isinstance(config, Mapping):
-        data = dict(config)
-        source = "<dict>"
-    else:
-        data = read_config_file(config)
-        source = str(config)
+    data, source = read_config(config)
     if "objects" in data:
         raise ConfigError(
             f"{source}: 'objects' is drawn per episode by the task; set the ranges in "

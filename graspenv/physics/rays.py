@@ -10,6 +10,9 @@ and, every frame, the rest height of each raised bottom particle
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from typing import Any
+
 import numpy as np
 import pybullet as pb
 from numpy.typing import NDArray
@@ -66,6 +69,20 @@ class RayCaster:
             tops.append(high[2])
         return max(tops) + _RAY_CLEARANCE
 
+    def _cast(
+        self, starts: NDArray[np.float64], ends: NDArray[np.float64]
+    ) -> Iterator[tuple[int, Any]]:
+        """(row, Bullet's hit) of every ray from ``starts`` to ``ends`` (metres, world
+        frame, shape (n, 3)), cast ``_RAY_BATCH`` at a time."""
+        for lo in range(0, starts.shape[0], _RAY_BATCH):
+            hits = pb.rayTestBatch(
+                starts[lo : lo + _RAY_BATCH].tolist(),
+                ends[lo : lo + _RAY_BATCH].tolist(),
+                collisionFilterMask=OBJECT_GROUP | STATIC_GROUP,
+                physicsClientId=self._client,
+            )
+            yield from enumerate(hits, start=lo)
+
     def heights(self, points: NDArray[np.float64]) -> RayHits:
         """The first surface under each point from above, and the object hit.
 
@@ -83,19 +100,12 @@ class RayCaster:
         ends = np.column_stack([points, np.full(n, -1e-3)])
         table = self._bodies.table
         object_of_body = self._bodies.object_of_body
-        for lo in range(0, n, _RAY_BATCH):
-            hits = pb.rayTestBatch(
-                starts[lo : lo + _RAY_BATCH].tolist(),
-                ends[lo : lo + _RAY_BATCH].tolist(),
-                collisionFilterMask=OBJECT_GROUP | STATIC_GROUP,
-                physicsClientId=self._client,
-            )
-            for i, hit in enumerate(hits, start=lo):
-                body = hit[0]
-                if body < 0 or body == table:
-                    continue
-                height[i] = hit[3][2]
-                hit_object[i] = object_of_body.get(body, -1)
+        for i, hit in self._cast(starts, ends):
+            body = hit[0]
+            if body < 0 or body == table:
+                continue
+            height[i] = hit[3][2]
+            hit_object[i] = object_of_body.get(body, -1)
         return RayHits(height, hit_object)
 
     def support_heights(
@@ -121,14 +131,7 @@ class RayCaster:
         ends[:, 2] = -1e-3
         height = np.zeros(starts.shape[0])
         table = self._bodies.table
-        for lo in range(0, starts.shape[0], _RAY_BATCH):
-            hits = pb.rayTestBatch(
-                starts[lo : lo + _RAY_BATCH].tolist(),
-                ends[lo : lo + _RAY_BATCH].tolist(),
-                collisionFilterMask=OBJECT_GROUP | STATIC_GROUP,
-                physicsClientId=self._client,
-            )
-            for i, hit in enumerate(hits, start=lo):
-                if hit[0] >= 0 and hit[0] != table and hit[3][2] <= starts[i, 2] - clearance:
-                    height[i] = hit[3][2]
+        for i, hit in self._cast(starts, ends):
+            if hit[0] >= 0 and hit[0] != table and hit[3][2] <= starts[i, 2] - clearance:
+                height[i] = hit[3][2]
         return height.reshape(n, -1).max(axis=1)

@@ -339,10 +339,28 @@ def _pinch_phases(
     return phases
 
 
+def _hold(frames: int) -> list[Phase]:
+    return [Phase(frames, name="hold")] if _frames(frames, "hold_frames") else []
+
+
 def _lift(names: Sequence[str], frames: int, phase_name: str = "lift") -> list[Phase]:
     if not _frames(frames, "lift_frames"):
         return []
     return [Phase(frames, {name: FingerMotion(touching=False) for name in names}, name=phase_name)]
+
+
+def _index_stroke(
+    settle_frames: int, move_frames: int, translation: ArrayLike, name: str, lift_frames: int
+) -> list[Phase]:
+    """Phases ``touch``, ``name`` (the ``index`` fingertip moves by ``translation``,
+    metres, world frame, (x, y)), ``lift``; ``move_frames`` is checked as ``{name}_frames``."""
+    phases = []
+    if _frames(settle_frames, "settle_frames"):
+        phases.append(Phase(settle_frames, {"index": FingerMotion(touching=True)}, name="touch"))
+    frames = _checks.count(move_frames, f"{name}_frames", minimum=1)
+    move = FingerMotion(touching=True, translation=_pair(translation, "translation"))
+    phases.append(Phase(frames, {"index": move}, name=name))
+    return phases + _lift(["index"], lift_frames)
 
 
 def two_finger_pinch(
@@ -396,8 +414,7 @@ def two_finger_pinch(
         phases.append(Phase(slide_frames, group=GroupMotion(pair, translation=shift), name="slide"))
     elif shift != (0.0, 0.0):
         raise ValueError("slide_frames must be >= 1 when slide is not zero")
-    if _frames(hold_frames, "hold_frames"):
-        phases.append(Phase(hold_frames, name="hold"))
+    phases += _hold(hold_frames)
     phases += _lift(pair, lift_frames)
     return Script(hand, phases)
 
@@ -429,8 +446,7 @@ def release(
     """
     hand = pinch_hand(centre, gap, finger_radius, axis_angle)
     phases = _pinch_phases(hand, approach, settle_frames, squeeze_frames)
-    if _frames(hold_frames, "hold_frames"):
-        phases.append(Phase(hold_frames, name="hold"))
+    phases += _hold(hold_frames)
     phases += _lift(["index"], _frames(stagger_frames, "stagger_frames"), "lift index")
     phases += _lift(["thumb", "index"], lift_frames)
     return Script(hand, phases)
@@ -477,8 +493,7 @@ def third_finger_push(
             name="push",
         )
     )
-    if _frames(hold_frames, "hold_frames"):
-        phases.append(Phase(hold_frames, name="hold"))
+    phases += _hold(hold_frames)
     phases += _lift(["thumb", "index", "middle"], lift_frames)
     return Script(hand, phases)
 
@@ -516,17 +531,7 @@ def side_strike(
     tip = Fingertip(point - (before + radius) * heading, direction, radii=(radius, radius))
     hand = Hand()
     hand.add("index", tip, touching=False)
-    phases = []
-    if _frames(settle_frames, "settle_frames"):
-        phases.append(Phase(settle_frames, {"index": FingerMotion(touching=True)}, name="touch"))
-    phases.append(
-        Phase(
-            _checks.count(strike_frames, "strike_frames", minimum=1),
-            {"index": FingerMotion(touching=True, translation=tuple(travel * heading))},
-            name="strike",
-        )
-    )
-    phases += _lift(["index"], lift_frames)
+    phases = _index_stroke(settle_frames, strike_frames, travel * heading, "strike", lift_frames)
     return Script(hand, phases)
 
 
@@ -556,15 +561,5 @@ def top_rub(
     tip = Fingertip(_checks.vector2(start, "start"), radii=(radius, radius), press=press)
     hand = Hand()
     hand.add("index", tip, touching=False)
-    phases = []
-    if _frames(settle_frames, "settle_frames"):
-        phases.append(Phase(settle_frames, {"index": FingerMotion(touching=True)}, name="touch"))
-    phases.append(
-        Phase(
-            _checks.count(rub_frames, "rub_frames", minimum=1),
-            {"index": FingerMotion(touching=True, translation=_pair(translation, "translation"))},
-            name="rub",
-        )
-    )
-    phases += _lift(["index"], lift_frames)
+    phases = _index_stroke(settle_frames, rub_frames, translation, "rub", lift_frames)
     return Script(hand, phases)

@@ -18,12 +18,9 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
+from graspenv.geometry import yaw_of
+
 __all__ = ["WRAPPERS", "RelativeGoal"]
-
-
-def _yaw(q: NDArray[np.floating[Any]]) -> float:
-    x, y, z, w = (float(v) for v in q)
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
 class RelativeGoal(gym.ObservationWrapper[NDArray[np.float32], Any, NDArray[np.float32]]):
@@ -56,7 +53,7 @@ class RelativeGoal(gym.ObservationWrapper[NDArray[np.float32], Any, NDArray[np.f
         goal = v[self.layout["goal"]]
         if self.goal_is_pose:
             offset = goal[:2] - xy
-            turn = goal[2] - _yaw(v[self.layout["object_quaternion"]])
+            turn = goal[2] - yaw_of(v[self.layout["object_quaternion"]])
         else:
             offset, turn = np.zeros(2), 0.0
         fingers = v[self.layout["finger_positions"]].reshape(-1, 2) - xy

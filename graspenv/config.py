@@ -158,6 +158,11 @@ class ContactConfig:
         return dataclasses.replace(self, spacing=self.contour_spacing(particle_radius))
 
 
+#: How many numbers each shape's ``size`` has: a box's full extents (x, y, z), a
+#: sphere's radius, a cylinder's radius and height.
+SIZE_VALUES: dict[str, int] = {"box": 3, "sphere": 1, "cylinder": 2}
+
+
 @dataclass(frozen=True)
 class ObjectConfig:
     """A rigid object that starts resting on the table.
@@ -188,7 +193,7 @@ class ObjectConfig:
     restitution: float = 0.0
 
     def __post_init__(self) -> None:
-        expected = {"box": 3, "sphere": 1, "cylinder": 2}[self.shape]
+        expected = SIZE_VALUES[self.shape]
         if len(self.size) != expected:
             raise ConfigError(
                 f"objects[{self.name}].size for a {self.shape} needs {expected} value(s), "

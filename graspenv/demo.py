@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from graspenv.bench.interactions import pinch
 from graspenv.config import ObjectConfig, SceneConfig, load_config
 from graspenv.contacts.tracking import ContactFrame
-from graspenv.geometry import footprint, yaw_of
+from graspenv.geometry import footprint, yaw_of, yaw_step
 from graspenv.simulation import Simulation
 from graspenv.surface.render import render_mask
 from graspenv.surface.scripts import Script
@@ -184,7 +184,7 @@ def run_demo(
             wall += report.total_time
             _, q = sim.object_pose(obj.name)
             new_yaw = yaw_of(q)
-            unwrapped += math.remainder(new_yaw - yaw, 2 * math.pi)
+            unwrapped += yaw_step(new_yaw, yaw)
             yaw = new_yaw
             if hand.is_touching("thumb"):
                 last_hand = hand

@@ -19,8 +19,10 @@ __all__ = [
     "footprint_depths",
     "inscribed_radius",
     "rotate",
+    "shoelace",
     "tilt_angle",
     "yaw_of",
+    "yaw_step",
 ]
 
 
@@ -28,6 +30,20 @@ def yaw_of(quaternion: Sequence[float] | NDArray[np.float64]) -> float:
     """Rotation about z of a quaternion (x, y, z, w), radians in (-π, π]."""
     x, y, z, w = (float(v) for v in quaternion)
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def yaw_step(now: float, before: float) -> float:
+    """How far a yaw turned from ``before`` to ``now``, radians in [-π, π]: the
+    shorter way round, so summing the steps of a motion unwraps its yaw."""
+    return math.remainder(now - before, 2 * math.pi)
+
+
+def shoelace(points: NDArray[np.float64]) -> float:
+    """Signed area of a closed polygon's vertices, shape (N, 2), positive when they
+    run counter-clockwise; taken about the first vertex, so coordinates far from the
+    origin lose no precision to the cancelling cross products."""
+    rel = points[1:] - points[0]
+    return 0.5 * float(np.sum(rel[:-1, 0] * rel[1:, 1] - rel[:-1, 1] * rel[1:, 0]))
 
 
 def rotate(points: NDArray[np.float64], angle: float) -> NDArray[np.float64]:

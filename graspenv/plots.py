@@ -228,9 +228,15 @@ def pareto_chart(
                 labels[i], (points[i][0], error(points[i][1])), xytext=(5, 5),
                 textcoords="offset points", fontsize=7, color=INK if i in front else MUTED,
             )  # fmt: skip
+    from matplotlib.ticker import FuncFormatter
+
+    plain = FuncFormatter(lambda value, _: f"{value:g}")
     ax.set_xscale("log")
+    ax.xaxis.set_major_formatter(plain)
+    ax.xaxis.set_minor_formatter(plain)
     if log_error:
         ax.set_yscale("log")
+        ax.yaxis.set_major_formatter(plain)
     else:
         top = max((points[i][1] for i in shown), default=1.0)
         ax.set_ylim(0.0, 1.12 * max(top, 1e-9))

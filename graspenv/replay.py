@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import SceneConfig, load_config, to_dict
-from graspenv.geometry import footprint, yaw_of
+from graspenv.geometry import footprint, yaw_of, yaw_step
 from graspenv.simulation import STAGES, FrameReport, Simulation, make_simulation
 from graspenv.viz import (
     draw_mask,
@@ -556,7 +556,7 @@ def replay(
                 for name in sim.object_names:
                     position, q = sim.object_pose(name)
                     now = yaw_of(q)
-                    unwrapped[name] += math.remainder(now - previous[name], 2 * math.pi)
+                    unwrapped[name] += yaw_step(now, previous[name])
                     previous[name] = now
                     positions[name].append(position)
                     yaws[name].append(unwrapped[name])

@@ -10,20 +10,19 @@ It reads the state vector from ``"state"`` observations (or the ``state`` entry 
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from numpy.typing import NDArray
 
+from graspenv.geometry import yaw_of
+
 __all__ = ["ScriptedAgent", "State", "squeeze_rate", "yaw_from_quaternion"]
 
 
-def yaw_from_quaternion(q: NDArray[np.floating[Any]]) -> float:
-    """Rotation about z of a quaternion (x, y, z, w), radians."""
-    x, y, z, w = (float(v) for v in q)
-    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+#: Rotation about z of a quaternion (x, y, z, w), radians (graspenv's own).
+yaw_from_quaternion = yaw_of
 
 
 def squeeze_rate(

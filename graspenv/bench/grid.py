@@ -68,7 +68,7 @@ from graspenv.config import (
     load_config,
     resolve_fidelity,
 )
-from graspenv.geometry import tilt_angle, yaw_of
+from graspenv.geometry import tilt_angle, yaw_of, yaw_step
 from graspenv.plots import HeatPanel, heat_maps, write_png
 from graspenv.simulation import Simulation
 from graspenv.surface.noise import SensorNoise
@@ -284,7 +284,7 @@ def grasp_run(
     def each(sim: Simulation, index: int, played: Played) -> bool:
         _, q = sim.object_pose("box")
         now = yaw_of(q)
-        state["yaw"] += math.remainder(now - state["last"], 2 * math.pi)
+        state["yaw"] += yaw_step(now, state["last"])
         state["last"] = now
         state["tilt"] = max(state["tilt"], math.degrees(tilt_angle(q)))
         if index in moving:

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
-from graspenv.geometry import tilt_angle, yaw_of
+from graspenv.geometry import tilt_angle, yaw_of, yaw_step
 from graspenv.simulation import Simulation
 from graspenv.surface.hand import Hand
 from graspenv.surface.render import render_mask
@@ -101,7 +101,7 @@ def play(sim: Simulation, script: Script, name: str, extra_frames: int = 0) -> T
         sim.step(empty if hand is None else render_mask(hand, sim.surface))
         position, q = sim.object_pose(name)
         now = yaw_of(q)
-        yaw += math.remainder(now - previous, 2 * math.pi)
+        yaw += yaw_step(now, previous)
         previous = now
         tilts.append(tilt_angle(q))
         positions.append(position)

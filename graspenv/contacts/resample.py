@@ -13,6 +13,7 @@ from typing import TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from graspenv.geometry import shoelace
 from graspenv.jit import njit
 
 G = TypeVar("G", bound=np.generic)
@@ -109,13 +110,6 @@ def _as_polyline(polyline: ArrayLike, name: str = "polyline") -> NDArray[np.floa
     return points
 
 
-def _shoelace(points: NDArray[np.float64]) -> float:
-    # About the first vertex, so world coordinates far from the origin lose no
-    # precision to the cancelling cross products.
-    rel = points[1:] - points[0]
-    return 0.5 * float(np.sum(rel[:-1, 0] * rel[1:, 1] - rel[:-1, 1] * rel[1:, 0]))
-
-
 def signed_area(polyline: ArrayLike) -> float:
     """Signed area enclosed by a closed polyline (shoelace formula).
 
@@ -127,7 +121,7 @@ def signed_area(polyline: ArrayLike) -> float:
         Area in the frame's units squared; positive when the vertices run
         counter-clockwise in that frame, zero for fewer than three vertices or a line.
     """
-    return _shoelace(_as_polyline(polyline))
+    return shoelace(_as_polyline(polyline))
 
 
 def orient_ccw(polyline: ArrayLike) -> NDArray[np.float64]:
@@ -144,7 +138,7 @@ def orient_ccw(polyline: ArrayLike) -> NDArray[np.float64]:
         chosen before orienting stays the start).
     """
     points = _as_polyline(polyline)
-    if _shoelace(points) >= 0.0:
+    if shoelace(points) >= 0.0:
         return points
     return np.concatenate([points[:1], points[:0:-1]])
 
@@ -179,7 +173,7 @@ def orient_ccw_kernel(
     changed = False
     for c in range(len(bounds) - 1):
         lo, hi = bounds[c], bounds[c + 1]
-        # The shoelace about the first vertex (see _shoelace).
+        # The shoelace about the first vertex (see graspenv.geometry.shoelace).
         x0, y0 = points[lo, 0], points[lo, 1]
         cross = 0.0
         for i in range(lo + 1, hi - 1):

@@ -11,7 +11,6 @@ task's hooks (:class:`graspenv.tasks.base.Task`) and knows no task by name.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Literal
@@ -32,7 +31,7 @@ from graspenv.config import (
     resolve_fidelity,
     scene_from,
 )
-from graspenv.geometry import footprint, yaw_of
+from graspenv.geometry import footprint, yaw_of, yaw_step
 from graspenv.simulation import Simulation
 from graspenv.surface.controller import ActionMode, ControllerConfig, FingerController
 from graspenv.surface.render import render_mask
@@ -352,7 +351,7 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         position, quaternion = sim.object_pose(name)
         linear, angular = sim.object_velocity(name)
         now = yaw_of(quaternion)
-        self._yaw_unwrapped += math.remainder(now - self._yaw_last, 2 * math.pi)
+        self._yaw_unwrapped += yaw_step(now, self._yaw_last)
         self._yaw_last = now
         self._measure(position, quaternion, linear, angular)
         m = self._metrics

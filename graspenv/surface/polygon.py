@@ -9,15 +9,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from graspenv.geometry import shoelace
 from graspenv.surface import _checks
 from graspenv.surface.contact_shape import BoolArray, ContactShape, FloatArray
 
 __all__ = ["PolygonShape"]
-
-
-def _signed_area(vertices: FloatArray) -> float:
-    x, y = vertices[:, 0], vertices[:, 1]
-    return float(0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
 
 
 def _edges_cross(vertices: FloatArray) -> bool:
@@ -91,7 +87,7 @@ class PolygonShape(ContactShape):
         steps = np.hypot(*(np.roll(local, -1, axis=0) - local).T)
         if np.any(steps == 0.0):
             raise ValueError("vertices must not repeat consecutively (zero-length edge)")
-        area = _signed_area(local)
+        area = shoelace(local)
         if area == 0.0:
             raise ValueError("vertices enclose zero area")
         if _edges_cross(local):

@@ -17,7 +17,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.config import ObjectConfig, SceneConfig, ShapeName
+from graspenv.config import SIZE_VALUES, ObjectConfig, SceneConfig, ShapeName
 from graspenv.surface.controller import ActionMode, ControllerConfig, GripState
 
 __all__ = [
@@ -107,7 +107,7 @@ class TaskConfig:
     frame_skip: int = 2
 
     def __post_init__(self) -> None:
-        expected = {"box": 3, "sphere": 1, "cylinder": 2}[self.shape]
+        expected = SIZE_VALUES[self.shape]
         for key in ("size_min", "size_max"):
             if len(getattr(self, key)) != expected:
                 raise ValueError(f"task.{key} for a {self.shape} needs {expected} values")

@@ -1,6 +1,5 @@
 """The long runs, behind ``make slow`` and never in ``make test``: the README's soak
-and the first thousand episodes of the long fuzz (about 5 minutes together on two
-idle cores; the fuzz's thousand took 295 s on two busy ones)."""
+and the first thousand episodes of the long fuzz (129 s together on two cores)."""
 
 from __future__ import annotations
 

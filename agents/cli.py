@@ -3,8 +3,9 @@
 graspenv never imports agents: these commands reach the ``graspenv`` command through
 the ``graspenv.commands`` entry-point group (``pyproject.toml``), each an ``add``
 function taking argparse's sub-parser table. The ``graspenv`` command imports this
-module whatever it is asked to do, so it must not import stable-baselines3 or torch:
-``train`` is imported when that command runs. User errors raise ``ValueError`` or
+module whatever it is asked to do, so it imports no command's modules itself (not
+stable-baselines3 or torch above all): each command imports what it needs when it
+runs. User errors raise ``ValueError`` or
 ``FileNotFoundError``, which the ``graspenv`` command prints as one line.
 """
 
@@ -14,10 +15,6 @@ import argparse
 import sys
 from collections.abc import Callable
 from pathlib import Path
-
-from .compare import compare
-from .evaluate import FIRST_SEED, evaluate, summary_table
-from .loading import load_agent
 
 __all__ = ["add_compare", "add_eval", "add_train"]
 
@@ -83,6 +80,13 @@ def _progress(label: str) -> Callable[[int, int], None]:
 
 
 def _eval(args: argparse.Namespace) -> int:
+    # The commands import their modules when they run, not here: this module is
+    # imported by every `graspenv` command, and evaluate and compare bring the
+    # environments and the compiled kernels (they made `graspenv --help` take 2.5
+    # times as long).
+    from .evaluate import FIRST_SEED, evaluate, summary_table
+    from .loading import load_agent
+
     _check_episodes(args.episodes)
     first = FIRST_SEED if args.seed is None else args.seed
     agent = load_agent(args.agent, first)
@@ -115,6 +119,8 @@ def add_eval(sub: argparse._SubParsersAction) -> None:
 
 
 def _compare(args: argparse.Namespace) -> int:
+    from .compare import compare  # as in _eval
+
     _check_episodes(args.episodes)
     result = compare(args.env, args.agent, args.episodes, args.seed, Path(args.out), progress=_say)
     print(result.table)

@@ -155,7 +155,5 @@ def test_the_command_starts_without_the_training_stack() -> None:
     # The log sees the command's imports (graspenv.cli's own), and the agents' commands
     # import nothing of theirs until one runs.
     assert "graspenv.config" in imported
-    assert not {m for m in imported if m.startswith("graspenv_agents.")} - {
-        "graspenv_agents.cli"
-    }
+    assert not {m for m in imported if m.startswith("graspenv_agents.")} - {"graspenv_agents.cli"}
     assert not {m for m in imported if m.split(".")[0] in ("torch", "stable_baselines3")}

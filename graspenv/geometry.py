@@ -21,6 +21,7 @@ __all__ = [
     "rotate",
     "shoelace",
     "tilt_angle",
+    "wrap_angle",
     "yaw_of",
     "yaw_step",
 ]
@@ -30,6 +31,11 @@ def yaw_of(quaternion: Sequence[float] | NDArray[np.float64]) -> float:
     """Rotation about z of a quaternion (x, y, z, w), radians in (-π, π]."""
     x, y, z, w = (float(v) for v in quaternion)
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def wrap_angle(angle: NDArray[np.float64] | float) -> NDArray[np.float64]:
+    """Angles wrapped into [-π, π), elementwise (goal errors of batches of poses)."""
+    return np.mod(np.asarray(angle, dtype=float) + math.pi, 2 * math.pi) - math.pi
 
 
 def yaw_step(now: float, before: float) -> float:

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import SIZE_VALUES, ObjectConfig, SceneConfig, ShapeName
+from graspenv.geometry import wrap_angle
 from graspenv.surface.controller import ActionMode, ControllerConfig, GripState
 
 __all__ = [
@@ -35,11 +36,6 @@ __all__ = [
 #: Random numbers :meth:`Task.initialize_episode` draws per episode: SqueezeHold's
 #: disturbance (heading, peak); other tasks draw and discard them.
 DISTURBANCE_DRAWS = 2
-
-
-def wrap_angle(angle: NDArray[np.float64] | float) -> NDArray[np.float64]:
-    """Angles wrapped into [-π, π)."""
-    return np.mod(np.asarray(angle, dtype=float) + math.pi, 2 * math.pi) - math.pi
 
 
 @dataclass(frozen=True)

@@ -21,19 +21,12 @@ from numpy.typing import NDArray
 from graspenv.bench.interactions import pinch
 from graspenv.config import ObjectConfig, SceneConfig, load_config
 from graspenv.contacts.tracking import ContactFrame
-from graspenv.geometry import footprint, yaw_of, yaw_step
+from graspenv.geometry import yaw_of, yaw_step
+from graspenv.replay import draw_table
 from graspenv.simulation import Simulation
 from graspenv.surface.render import render_mask
 from graspenv.surface.scripts import Script
-from graspenv.viz import (
-    contact_sheet,
-    draw_mask,
-    draw_points,
-    draw_polyline,
-    id_colour,
-    put_label,
-    write_animation,
-)
+from graspenv.viz import contact_sheet, put_label, write_animation
 
 __all__ = ["DemoResult", "pinch_script", "run_demo"]
 
@@ -103,15 +96,7 @@ def _picture(
         centre: world point the picture is centred on, metres, shape (2,).
     """
     surface = sim.surface
-    canvas = draw_mask(mask, _SCALE)
-    position, quaternion = sim.object_pose(obj.name)
-    outline = footprint(obj, position, yaw_of(quaternion))
-    draw_polyline(canvas, surface, outline, (255, 200, 80), _SCALE, thickness=2)
-    for contact in contacts:
-        draw_polyline(canvas, surface, contact.contour, id_colour(contact.id), _SCALE)
-    particles = sim.particle_positions()
-    if len(particles):
-        draw_points(canvas, surface, particles[:, :2], (80, 80, 255), _SCALE, radius=2.0)
+    canvas = draw_table(sim, mask, contacts, _SCALE, [obj])
     h, w = canvas.shape[:2]
     c = (surface.world_to_pixel(centre) + 0.5) * _SCALE
     lo = np.clip(np.round(c).astype(int) - _HALF_CROP, 0, [w - 2 * _HALF_CROP, h - 2 * _HALF_CROP])

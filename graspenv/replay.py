@@ -28,7 +28,7 @@ import math
 import re
 import time
 import warnings
-from collections.abc import Callable, Generator, Iterator
+from collections.abc import Callable, Generator, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -37,7 +37,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.config import SceneConfig, load_config, to_dict
+from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
+from graspenv.contacts.tracking import ContactFrame
 from graspenv.geometry import footprint, yaw_of, yaw_step
 from graspenv.simulation import STAGES, FrameReport, Simulation, make_simulation
 from graspenv.viz import (
@@ -54,6 +55,7 @@ __all__ = [
     "IMAGE_SUFFIXES",
     "ObjectTrack",
     "ReplayResult",
+    "draw_table",
     "read_masks",
     "replay",
 ]
@@ -405,19 +407,40 @@ class ReplayResult:
 # -- pictures ------------------------------------------------------------------------
 
 
-def _picture(sim: Simulation, mask: Mask, report: FrameReport, scale: int) -> NDArray[np.uint8]:
-    """The whole table at one frame: mask, object outlines, contours, particles, labels."""
+def draw_table(
+    sim: Simulation,
+    mask: Mask,
+    contacts: ContactFrame,
+    scale: int,
+    objects: Sequence[ObjectConfig] | None = None,
+) -> NDArray[np.uint8]:
+    """One frame of the table, unlabelled: the mask (grey), object outlines (blue),
+    tracked contours (coloured by contact id) and particles (red).
+
+    Args:
+        mask: the frame's contact mask, camera pixels, shape (H, W).
+        contacts: the contacts tracked in ``mask``.
+        scale: canvas pixels per camera pixel.
+        objects: the objects to outline (default: every object of the scene).
+    """
     surface = sim.surface
     canvas = draw_mask(mask, scale)
-    for obj in sim.config.objects:
+    for obj in sim.config.objects if objects is None else objects:
         position, quaternion = sim.object_pose(obj.name)
         outline = footprint(obj, position, yaw_of(quaternion))
         draw_polyline(canvas, surface, outline, _OBJECT_COLOUR, scale, thickness=2)
-    for contact in report.contacts:
+    for contact in contacts:
         draw_polyline(canvas, surface, contact.contour, id_colour(contact.id), scale)
     particles = sim.particle_positions()
     if len(particles):
         draw_points(canvas, surface, particles[:, :2], _PARTICLE_COLOUR, scale, radius=2.0)
+    return canvas
+
+
+def _picture(sim: Simulation, mask: Mask, report: FrameReport, scale: int) -> NDArray[np.uint8]:
+    """The whole table at one frame: mask, object outlines, contours, particles, labels."""
+    surface = sim.surface
+    canvas = draw_table(sim, mask, report.contacts, scale)
     put_label(canvas, f"frame {report.index}  t {report.index / surface.fps:.3f} s", 0)
     put_label(canvas, f"contacts {report.n_contacts}  particles {report.n_particles}", 1)
     return canvas

@@ -31,6 +31,7 @@ from numpy.typing import NDArray
 
 import graspenv
 
+from .agent import Agent
 from .hyperparams import ALGOS, algorithm
 from .scripted import STRATEGIES
 from .wrappers import WRAPPERS
@@ -64,8 +65,8 @@ def make_env(env_id: str, env_kwargs: dict[str, Any], wrapper: str) -> gym.Env[A
     return WRAPPERS[wrapper](env) if wrapper else env
 
 
-class RandomAgent:
-    """Uniform random actions from a seeded action space."""
+class RandomAgent(Agent):
+    """Uniform random actions from a seeded action space (no memory)."""
 
     name = "random"
 
@@ -73,39 +74,25 @@ class RandomAgent:
         self.action_space = env.action_space
         self.action_space.seed(seed)
 
-    def reset(self) -> None:
-        """Random actions keep no memory."""
-
-    def predict(
-        self,
-        observation: Any,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[NDArray[np.float32], Any]:
-        return np.asarray(self.action_space.sample(), np.float32), state
+    def _action(self, observation: Any, deterministic: bool) -> NDArray[np.float32]:
+        return np.asarray(self.action_space.sample(), np.float32)
 
 
-class LearnedAgent:
-    """A stable-baselines3 model with the observation normalisation it trained with."""
+class LearnedAgent(Agent):
+    """A stable-baselines3 model with the observation normalisation it trained with.
+
+    The PPO and SAC MLP policies keep no memory: SB3 ignores their ``state`` and
+    ``episode_start``, so :meth:`Agent.predict` need not pass them on.
+    """
 
     def __init__(self, model: Any, normalizer: Any | None, name: str) -> None:
         self.model, self.normalizer, self.name = model, normalizer, name
 
-    def reset(self) -> None:
-        """MLP policies keep no memory."""
-
-    def predict(
-        self,
-        observation: Any,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[NDArray[np.float32], Any]:
+    def _action(self, observation: Any, deterministic: bool) -> NDArray[np.float32]:
         if self.normalizer is not None:
             observation = self.normalizer.normalize_obs(observation)
-        action, state = self.model.predict(observation, state, episode_start, deterministic)
-        return np.asarray(action, np.float32), state
+        action, _ = self.model.predict(observation, deterministic=deterministic)
+        return np.asarray(action, np.float32)
 
 
 @dataclass(frozen=True)

@@ -1,11 +1,11 @@
-"""What every scripted strategy shares: the SB3-style ``predict`` and the state vector.
+"""What every scripted strategy shares: the state vector, and SB3's ``predict`` from it.
 
 A strategy is written against the public environment interface only: the action
 space and ``env.unwrapped.observation_layout`` (named slices of the state vector).
 It reads the state vector from ``"state"`` observations (or the ``state`` entry of
 ``"mask"`` ones) and keeps its own phase from one call to the next, restarting when
 ``episode_start`` says so (as vectorised SB3 evaluation passes it) or when
-:meth:`reset` is called.
+:meth:`reset` is called (:class:`~graspenv_agents.agent.Agent`).
 """
 
 from __future__ import annotations
@@ -17,6 +17,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.geometry import yaw_of
+
+from ..agent import Agent
 
 __all__ = ["ScriptedAgent", "State", "squeeze_rate", "yaw_from_quaternion"]
 
@@ -80,7 +82,7 @@ class State:
         return self["goal"]
 
 
-class ScriptedAgent:
+class ScriptedAgent(Agent):
     """Base class: subclasses implement :meth:`act` for one observation.
 
     Args:
@@ -96,9 +98,6 @@ class ScriptedAgent:
         self.action_space = env.action_space
         self.reset()
 
-    def reset(self) -> None:
-        """Forget the episode (phase, memory)."""
-
     def act(self, state: State) -> NDArray[np.float64]:
         """One action for one state."""
         raise NotImplementedError
@@ -108,20 +107,11 @@ class ScriptedAgent:
             observation = observation["state"]
         return np.asarray(observation, dtype=float)
 
-    def predict(
-        self,
-        observation: Any,
-        state: Any = None,
-        episode_start: Any = None,
-        deterministic: bool = True,
-    ) -> tuple[NDArray[np.float32], Any]:
-        """SB3's interface: one observation, or a batch of one from a VecEnv."""
+    def _action(self, observation: Any, deterministic: bool) -> NDArray[np.float32]:
         vector = self._vector(observation)
         batched = vector.ndim == 2
         if batched and vector.shape[0] != 1:
             raise ValueError("a scripted strategy keeps one episode's memory: use n_envs=1")
-        if episode_start is not None and bool(np.asarray(episode_start).ravel()[0]):
-            self.reset()
         raw = self.act(State(vector[0] if batched else vector, self.layout))
         action = np.clip(raw, -1.0, 1.0).astype(np.float32)
-        return (action[None, :] if batched else action), state
+        return action[None, :] if batched else action

@@ -1,7 +1,9 @@
 """The plain-numpy forms of the compiled per-frame kernels, as they stood before
 the hot path was compiled (graspenv 0.1, issue 12): the oracles the kernels are
 checked against on random inputs (tests/contacts/test_kernels.py). Not used by the
-package."""
+package, and using none of it: each function takes the arguments of the public
+function it checks and gives its result, which that function's docstring describes;
+the docstrings here say how the numpy form gets there."""
 
 from __future__ import annotations
 
@@ -12,34 +14,28 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.contacts.resample import bounds_of, owners_of
-
 _CAP = 0.5
 _SMOOTH_FROM = 8
 _OVERLAP = 0.25
 IntArray = NDArray[np.intp]
 
 
+def _bounds(sizes: Sequence[int] | IntArray) -> IntArray:
+    """Where each of several arrays laid end to end starts, then the total: (C + 1,)."""
+    return np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp)
+
+
 def outlines_from_chains(
     chains: Sequence[NDArray[np.integer]],
 ) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
-    """:func:`outline_from_chain` for many chains in one pass.
+    """:func:`graspenv.contacts.extract.outlines_from_chains`, bit for bit.
 
     Chains that never double back (fingertips, palms: the per-frame case) go through
     one fixed sequence of numpy calls together; a chain with a line or spur, or a
     single pixel, is capped on its own.
-
-    Args:
-        chains: boundary chains, pixels (column, row), each of shape (K_i, 2) with
-            K_i >= 1.
-
-    Returns:
-        (outlines, bounds): the outlines one after another, pixels (column, row),
-        shape (L, 2), and outline i is ``outlines[bounds[i]:bounds[i + 1]]``,
-        shape (len(chains) + 1,).
     """
     sizes = np.array([len(c) for c in chains], dtype=np.intp)
-    bounds = bounds_of(sizes)
+    bounds = _bounds(sizes)
     points = np.concatenate(chains).astype(np.float64)
     first, last = bounds[:-1], bounds[1:] - 1
     index = np.arange(len(points))
@@ -67,7 +63,7 @@ def outlines_from_chains(
                 pieces[i] = together[cuts[k] : cuts[k + 1]]
         for i in np.flatnonzero(capped).tolist():
             pieces[i] = _capped_outline(points[bounds[i] : bounds[i + 1]], outward[i])
-        return np.concatenate(pieces), bounds_of([len(p) for p in pieces])
+        return np.concatenate(pieces), _bounds([len(p) for p in pieces])
     side = np.repeat(outward, sizes)
     outline = _offset_outward(points, tangent, length, side)
     # The pixel staircase is 5 % longer than the edge it follows and spaces resampled
@@ -136,18 +132,9 @@ def _capped_outline(points: NDArray[np.float64], outward: float) -> NDArray[np.f
 
 
 def orient_ccw_batch(points: NDArray[np.float64], bounds: NDArray[np.intp]) -> NDArray[np.float64]:
-    """:func:`orient_ccw` for many closed polylines in one pass.
-
-    Args:
-        points: the polylines one after another, shape (T, 2), right-handed frame;
-            polyline c is ``points[bounds[c]:bounds[c + 1]]``.
-        bounds: shape (C + 1,), as in :func:`resample_closed_batch`.
-
-    Returns:
-        Shape (T, 2), same bounds: each polyline counter-clockwise (those already so
-        are unchanged; the others reversed with their first vertex kept first). The
-        input itself when every polyline already runs counter-clockwise.
-    """
+    """:func:`graspenv.contacts.resample.orient_ccw_batch`, bit for bit: every
+    polyline's shoelace sum in one ``np.add.reduceat``, then the clockwise ones
+    reversed one by one."""
     first = bounds[:-1]
     # The shoelace about each polyline's first vertex (see _shoelace).
     rel = points - np.repeat(points[first], np.diff(bounds), axis=0)
@@ -168,34 +155,21 @@ def resample_closed_batch(
     points: NDArray[np.float64],
     bounds: NDArray[np.intp],
     spacing: float,
-    starts: NDArray[np.float64] | None = None,
+    starts: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
-    """:func:`resample_closed` for many closed polylines in one pass.
+    """:func:`graspenv.contacts.resample.resample_closed_batch` with ``starts`` given
+    (a NaN row for none), up to rounding in the last bits: the arc lengths here run
+    along all the polylines one after another, not along each from its own first
+    vertex.
 
-    The per-frame path: every contact of a frame is resampled by the same fixed
-    sequence of numpy calls, however many there are. Polyline c gives exactly what
-    ``resample_closed(points[bounds[c]:bounds[c + 1]], spacing, starts[c])`` gives, up
-    to rounding in the last bits (its arc lengths are measured along all of them).
-
-    Args:
-        points: the polylines' vertices one after another, shape (T, 2), each closed,
-            same frame (metres, world frame for contacts), all finite.
-        bounds: polyline c is ``points[bounds[c]:bounds[c + 1]]``, shape (C + 1,),
-            ``bounds[0] == 0``, strictly increasing, ``bounds[-1] == T``.
-        spacing: requested arc length between consecutive points.
-        starts: start point of each polyline, shape (C, 2), a row with a NaN for
-            none (start at the first vertex); ``None`` for none at all.
-
-    Returns:
-        (resampled, resampled_bounds): the resampled points one polyline after
-        another, shape (R, 2), and their bounds, shape (C + 1,).
-
-    Raises:
-        ValueError: a non-positive spacing or a polyline of zero perimeter.
+    Every polyline goes through the same fixed sequence of numpy calls, however many
+    there are: the segment leaving each vertex, the point of each polyline closest to
+    its start, then the targets placed along all of them at once.
     """
     if not (np.isfinite(spacing) and spacing > 0.0):
         raise ValueError(f"spacing must be finite and > 0, got {spacing}")
     total = len(points)
+    sizes = np.diff(bounds)
     first, last = bounds[:-1], bounds[1:] - 1
     following = np.arange(1, total + 1)
     following[last] = first
@@ -212,16 +186,25 @@ def resample_closed_batch(
         raise ValueError("polyline has zero perimeter; it needs at least two distinct points")
     count = np.maximum(np.rint(perimeter / spacing).astype(np.intp), 3)
 
+    # A polyline with a start begins at its point closest to it (the earliest on a
+    # tie): every vertex's segment projected onto its polyline's start at once. The
+    # polylines without one have NaN distances, and no hits.
     origin = np.zeros(len(first))
-    if starts is not None:
-        has = ~np.isnan(starts).any(axis=1)
-        if has.any():
-            origin[has] = (
-                _closest_arc_positions(points, bounds, step, length, arc, starts)[has] - base[has]
-            )
+    has = ~np.isnan(starts).any(axis=1)
+    if has.any():
+        start = np.repeat(starts, sizes, axis=0)
+        squared = length * length
+        along = np.einsum("ij,ij->i", start - points, step)
+        t = np.clip(along / np.where(squared > 0.0, squared, 1.0), 0.0, 1.0)
+        gap = points + t[:, None] * step - start
+        distance = np.einsum("ij,ij->i", gap, gap)
+        nearest = np.minimum.reduceat(distance, first)
+        hits = np.flatnonzero(distance == np.repeat(nearest, sizes))
+        best = hits[np.minimum(np.searchsorted(hits, first), hits.size - 1)][has]
+        origin[has] = arc[best] + t[best] * length[best] - base[has]
 
-    resampled_bounds = bounds_of(count)
-    which, index = owners_of(resampled_bounds)
+    which = np.repeat(np.arange(len(count)), count)
+    index = np.concatenate([np.arange(n) for n in count.tolist()])
     targets = np.mod(origin[which] + (perimeter / count)[which] * index, perimeter[which])
     targets += base[which]
     # side="right" skips zero-length segments (repeated vertices): a target sitting
@@ -229,34 +212,7 @@ def resample_closed_batch(
     segment = np.minimum(np.searchsorted(arc, targets, side="right") - 1, last[which])
     edge = length[segment]
     fraction = (targets - arc[segment]) / np.where(edge > 0.0, edge, 1.0)
-    return points[segment] + fraction[:, None] * step[segment], resampled_bounds
-
-
-def _closest_arc_positions(
-    points: NDArray[np.float64],
-    bounds: NDArray[np.intp],
-    step: NDArray[np.float64],
-    length: NDArray[np.float64],
-    arc: NDArray[np.float64],
-    starts: NDArray[np.float64],
-) -> NDArray[np.float64]:
-    """Arc position (along all polylines) of each polyline's point closest to its
-    start (the earliest on a tie), shape (C,); NaN where the start is NaN."""
-    sizes = np.diff(bounds)
-    start = np.repeat(starts, sizes, axis=0)
-    squared = length * length
-    along = np.einsum("ij,ij->i", start - points, step)
-    t = np.clip(along / np.where(squared > 0.0, squared, 1.0), 0.0, 1.0)
-    gap = points + t[:, None] * step - start
-    distance = np.einsum("ij,ij->i", gap, gap)
-    nearest = np.minimum.reduceat(distance, bounds[:-1])
-    hits = np.flatnonzero(distance == np.repeat(nearest, sizes))
-    if hits.size == 0:
-        return np.full(len(sizes), np.nan)
-    best = hits[np.minimum(np.searchsorted(hits, bounds[:-1]), hits.size - 1)]
-    position = arc[best] + t[best] * length[best]
-    position[np.isnan(nearest)] = np.nan
-    return position
+    return points[segment] + fraction[:, None] * step[segment], _bounds(count)
 
 
 def anchors(has: NDArray[np.bool_], bounds: IntArray) -> IntArray:

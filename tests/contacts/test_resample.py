@@ -7,10 +7,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from graspenv.bench.contact_scenes import ellipse_mask_world
+from graspenv.bench.contact_scenes import Finger, ellipse_mask_world
 from graspenv.contacts import find_components, orient_ccw, resample_closed, signed_area
 from graspenv.contacts.resample import orient_ccw_batch, resample_closed_batch
 from graspenv.surface.geometry import Surface
+
+from .strategies import fingertip_axes, fingertips
 
 SQUARE = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])  # counter-clockwise
 
@@ -97,8 +99,7 @@ def _ellipse(centre: np.ndarray, a: float, b: float, angle: float, n: int) -> np
 
 @settings(max_examples=60, deadline=None)
 @given(
-    a=st.floats(0.006, 0.012),
-    b=st.floats(0.006, 0.012),
+    axes=fingertip_axes,
     angle=st.floats(0.0, np.pi),
     spacing=st.floats(0.002, 0.004),
     vertices=st.integers(40, 400),
@@ -106,15 +107,14 @@ def _ellipse(centre: np.ndarray, a: float, b: float, angle: float, n: int) -> np
     start=st.floats(0.0, 2.0 * np.pi),
 )
 def test_spacing_within_ten_percent_and_orientation_kept(
-    a: float,
-    b: float,
+    axes: tuple[float, float],
     angle: float,
     spacing: float,
     vertices: int,
     clockwise: bool,
     start: float,
 ) -> None:
-    polyline = _ellipse(np.array([0.2, -0.1]), a, b, angle, vertices)
+    polyline = _ellipse(np.array([0.2, -0.1]), *axes, angle, vertices)
     if clockwise:
         polyline = polyline[::-1]
     begin = np.array([0.2 + 0.05 * np.cos(start), -0.1 + 0.05 * np.sin(start)])
@@ -133,18 +133,10 @@ def test_spacing_within_ten_percent_and_orientation_kept(
 
 
 @settings(max_examples=25, deadline=None)
-@given(
-    x=st.floats(-0.25, 0.25),
-    y=st.floats(-0.18, 0.18),
-    a=st.floats(0.006, 0.012),
-    b=st.floats(0.006, 0.012),
-    angle=st.floats(0.0, np.pi),
-)
-def test_rendered_fingertip_contour_keeps_the_spacing(
-    x: float, y: float, a: float, b: float, angle: float
-) -> None:
+@given(finger=fingertips)
+def test_rendered_fingertip_contour_keeps_the_spacing(finger: Finger) -> None:
     surface = Surface()
-    mask = ellipse_mask_world(surface, np.array([x, y]), (a, b), angle)
+    mask = ellipse_mask_world(surface, *finger)
     (component,) = find_components(mask.view(np.uint8))
     outline = orient_ccw(surface.pixel_to_world(component.outline))
     points = resample_closed(outline, 0.004)

@@ -12,6 +12,8 @@ from graspenv.config import ContactConfig
 from graspenv.contacts import ContactFrame, ContactTracker, signed_area
 from graspenv.surface.geometry import Surface
 
+from .strategies import fingertips
+
 TIP = (0.008, 0.006)  # fingertip semi-axes, metres
 
 
@@ -52,18 +54,9 @@ def test_empty_mask_gives_an_empty_frame(tracker: ContactTracker, surface: Surfa
 
 
 @settings(max_examples=25, deadline=None)
-@given(
-    x=st.floats(-0.28, 0.28),
-    y=st.floats(-0.2, 0.2),
-    a=st.floats(0.006, 0.012),
-    b=st.floats(0.006, 0.012),
-    angle=st.floats(0.0, np.pi),
-)
-def test_contact_geometry_in_the_world_frame(
-    x: float, y: float, a: float, b: float, angle: float
-) -> None:
+@given(finger=fingertips)
+def test_contact_geometry_in_the_world_frame(finger: Finger) -> None:
     surface = Surface()
-    finger = _finger(x, y, (a, b), angle)
     (contact,) = ContactTracker(surface, ContactConfig()).update(render_fingers(surface, [finger]))
     pixel = float(np.max(surface.pixel_size))
     # Within a pixel of the analytic ellipse, in metres, counter-clockwise from above.
@@ -72,6 +65,7 @@ def test_contact_geometry_in_the_world_frame(
     assert signed_area(contact.outline) > 0.0
     assert signed_area(contact.contour) > 0.0
     assert np.hypot(*(contact.centroid - finger[0])) < 0.35 * pixel
+    a, b = finger[1]
     assert contact.area == pytest.approx(np.pi * a * b, rel=0.1)
     steps = np.linalg.norm(np.roll(contact.contour, -1, axis=0) - contact.contour, axis=1)
     assert abs(float(np.mean(steps)) - 0.004) < 0.1 * 0.004

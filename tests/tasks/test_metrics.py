@@ -426,14 +426,13 @@ def test_coulomb_slip_force_is_twice_mu_times_each_fingers_push() -> None:
 
 @dataclasses.dataclass(frozen=True)
 class Report:
-    """A stand-in for graspenv.physics.ContactReport with the same attribute names."""
+    """A contact report with only the attributes grasp_metrics reads
+    (:class:`graspenv.tasks.metrics.ContactArrays`)."""
 
     particle: NDArray[np.int64]
-    other_object: NDArray[np.int64]
     position: NDArray[np.float64]
     normal: NDArray[np.float64]
     normal_force: NDArray[np.float64]
-    friction: NDArray[np.float64]
     distance: NDArray[np.float64]
 
 
@@ -444,11 +443,9 @@ def report(
     k = len(rows)
     return Report(
         particle=np.array([r[0] for r in rows], dtype=np.int64),
-        other_object=np.full(k, -1, dtype=np.int64),
         position=np.array([r[1] for r in rows], dtype=float).reshape(k, 3),
         normal=np.array([r[2] for r in rows], dtype=float).reshape(k, 3),
         normal_force=np.array([r[3] for r in rows], dtype=float),
-        friction=np.zeros((k, 3)),
         distance=np.array([r[4] for r in rows], dtype=float),
     )
 
@@ -576,7 +573,12 @@ def test_a_physics_contact_report_is_accepted_as_is() -> None:
     from graspenv.physics import ContactReport
 
     r = report(SQUEEZE)
-    real = ContactReport(**dataclasses.asdict(r))
+    k = len(SQUEEZE)
+    real = ContactReport(
+        **dataclasses.asdict(r),
+        other_object=np.full(k, -1, dtype=np.int64),
+        friction=np.zeros((k, 3)),
+    )
     m = grasp_metrics(real, BOX_CENTRE, IDENTITY, AT_REST, AT_REST, np.zeros((4, 2)), 0.25)
     assert m == grasp_metrics(r, BOX_CENTRE, IDENTITY, AT_REST, AT_REST, np.zeros((4, 2)), 0.25)
 

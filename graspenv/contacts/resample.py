@@ -22,6 +22,7 @@ __all__ = [
     "bounds_of",
     "checked_bounds",
     "gather",
+    "gather_rows",
     "orient_ccw",
     "orient_ccw_batch",
     "owners_of",
@@ -90,6 +91,25 @@ def gather(
         (gathered, gathered_bounds): ``points[bounds[order[k]]:bounds[order[k] + 1]]``
         for k = 0, 1, ... one after another, and their bounds, shape (K + 1,).
     """
+    rows, new_bounds = gather_rows(bounds, order)
+    return points[rows], new_bounds
+
+
+@njit
+def gather_rows(
+    bounds: NDArray[np.intp], order: NDArray[np.intp]
+) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """The rows :func:`gather` takes, and their bounds: for arrays laid end to end
+    that travel together (one bounds for several), index each with the same rows.
+
+    Args:
+        bounds: array c is ``points[bounds[c]:bounds[c + 1]]``, shape (C + 1,).
+        order: which arrays to take, in order, shape (K,).
+
+    Returns:
+        (rows, gathered_bounds): ``bounds[order[k]]``, ..., ``bounds[order[k] + 1] - 1``
+        for k = 0, 1, ... one after another, and their bounds, shape (K + 1,).
+    """
     new_bounds = np.zeros(len(order) + 1, np.intp)
     for k in range(len(order)):
         new_bounds[k + 1] = new_bounds[k] + bounds[order[k] + 1] - bounds[order[k]]
@@ -98,7 +118,7 @@ def gather(
         lo = bounds[order[k]]
         for i in range(new_bounds[k + 1] - new_bounds[k]):
             rows[new_bounds[k] + i] = lo + i
-    return points[rows], new_bounds
+    return rows, new_bounds
 
 
 def _as_polyline(polyline: ArrayLike, name: str = "polyline") -> NDArray[np.float64]:
@@ -328,6 +348,21 @@ def resample_kernel(
             out[out_bounds[c] + k, 0] = points[segment, 0] + fraction * step[segment, 0]
             out[out_bounds[c] + k, 1] = points[segment, 1] + fraction * step[segment, 1]
     return out, out_bounds
+
+
+@njit
+def resample_outlines(
+    outlines: NDArray[np.float64],
+    bounds: NDArray[np.intp],
+    spacing: float,
+    starts: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+    """:func:`resample_kernel` for contact outlines (the per-frame stages): every
+    outline encloses an area, so a zero perimeter is a bug, raised."""
+    resampled, resampled_bounds = resample_kernel(outlines, bounds, spacing, starts)
+    if resampled_bounds[0] < 0:  # cannot happen: every outline encloses an area
+        raise ValueError("a contact outline has zero perimeter")
+    return resampled, resampled_bounds
 
 
 @njit

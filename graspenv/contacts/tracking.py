@@ -66,7 +66,8 @@ from numpy.typing import NDArray
 
 from graspenv.config import ContactConfig
 from graspenv.contacts.extract import components, traced_chains, validate_mask
-from graspenv.contacts.resample import gather, orient_ccw_kernel, resample_kernel
+from graspenv.contacts.resample import gather, orient_ccw_kernel, resample_outlines
+from graspenv.geometry import reach_from
 from graspenv.jit import njit
 from graspenv.surface.geometry import Surface
 
@@ -393,16 +394,8 @@ def _track_frame(
         chains, chain_bounds, width, min_area
     )
     count = len(areas)
-    sx, sy, w, h = transform[0], transform[1], transform[2], transform[3]
-    outlines = np.empty_like(px_outlines)
-    for i in range(len(px_outlines)):
-        outlines[i, 0] = (px_outlines[i, 0] + 0.5) * sx - 0.5 * w
-        outlines[i, 1] = 0.5 * h - (px_outlines[i, 1] + 0.5) * sy
-    centroids = np.empty_like(px_centroids)
-    for i in range(count):
-        centroids[i, 0] = (px_centroids[i, 0] + 0.5) * sx - 0.5 * w
-        centroids[i, 1] = 0.5 * h - (px_centroids[i, 1] + 0.5) * sy
-    outlines, _ = orient_ccw_kernel(outlines, bounds)
+    outlines, _ = orient_ccw_kernel(_to_world(px_outlines, transform), bounds)
+    centroids = _to_world(px_centroids, transform)
     keep, merged, parent = _match(
         prev_centroids, prev_outlines, prev_outline_bounds, prev_ids,
         centroids, outlines, bounds, radius,
@@ -425,9 +418,7 @@ def _track_frame(
             next_id += 1
             if parent[c] >= 0:
                 origins[c] = prev_ids[parent[c]]
-    contours, contour_bounds = resample_kernel(outlines, bounds, spacing, starts)
-    if contour_bounds[0] < 0:  # cannot happen: every outline encloses an area
-        raise ValueError("a contact outline has zero perimeter")
+    contours, contour_bounds = resample_outlines(outlines, bounds, spacing, starts)
     order = np.argsort(ids, kind="mergesort")
     rank = np.empty(count, np.intp)
     rank[order] = np.arange(count)
@@ -445,6 +436,18 @@ def _track_frame(
         ids[order], keep[order] < 0, centroids[order], areas[order], outlines, outline_bounds,
         contours, contour_bounds, origins[order], merged_into, removed,
     )  # fmt: skip
+
+
+@njit
+def _to_world(pixels: NDArray[np.float64], transform: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Pixel (column, row) points, shape (N, 2), in metres, world frame
+    (``Surface.pixel_to_world``; ``transform`` is the tracker's ``(sx, sy, w, h)``)."""
+    sx, sy, w, h = transform[0], transform[1], transform[2], transform[3]
+    world = np.empty_like(pixels)
+    for i in range(len(pixels)):
+        world[i, 0] = (pixels[i, 0] + 0.5) * sx - 0.5 * w
+        world[i, 1] = 0.5 * h - (pixels[i, 1] + 0.5) * sy
+    return world
 
 
 # At least this fraction of one outline inside the other makes two contacts overlap.
@@ -476,8 +479,8 @@ def _match(
     parent = np.full(n_cur, -1, np.intp)
     if n_prev == 0 or n_cur == 0:
         return keep, merged, parent
-    prev_reach = _reach(prev_centroids, prev_outlines, prev_bounds)
-    reach = _reach(centroids, outlines, bounds)
+    prev_reach = reach_from(prev_centroids, prev_outlines, prev_bounds)
+    reach = reach_from(centroids, outlines, bounds)
     by_x = np.argsort(centroids[:, 0], kind="mergesort")
     xs = centroids[by_x, 0]
     taken = np.zeros(n_prev, np.bool_)
@@ -562,18 +565,6 @@ def _match(
 @njit
 def _distance(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
     return float(np.hypot(a[0] - b[0], a[1] - b[1]))
-
-
-@njit
-def _reach(
-    centroids: NDArray[np.float64], outlines: NDArray[np.float64], bounds: NDArray[np.intp]
-) -> NDArray[np.float64]:
-    """How far each outline reaches from its centroid, metres, shape (C,)."""
-    reach = np.zeros(len(centroids))
-    for c in range(len(centroids)):
-        for i in range(bounds[c], bounds[c + 1]):
-            reach[c] = max(reach[c], _distance(outlines[i], centroids[c]))
-    return reach
 
 
 @njit

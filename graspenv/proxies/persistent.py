@@ -49,8 +49,9 @@ from numpy.typing import NDArray
 
 from graspenv.config import ProxyConfig
 from graspenv.contacts.matching import correspond_batch
-from graspenv.contacts.resample import bounds_of, gather, resample_kernel
+from graspenv.contacts.resample import bounds_of, gather, gather_rows, resample_outlines
 from graspenv.contacts.tracking import ContactFrame
+from graspenv.geometry import reach_from
 from graspenv.jit import njit
 from graspenv.physics.world import PhysicsWorld
 from graspenv.proxies.base import ProxyCommand, rotation_kernel
@@ -286,17 +287,15 @@ class PersistentProxies:
         # Both kinds together, then in the frame's (ascending id) order.
         both_bounds = bounds_of(np.concatenate([np.diff(followed.bounds), np.diff(bounds)]))
         order = np.argsort(np.concatenate([np.flatnonzero(follows), new]), kind="stable")
-        rows_points, tracks_bounds = gather(
-            np.concatenate([followed.points, points]), both_bounds, order
-        )
+        rows, tracks_bounds = gather_rows(both_bounds, order)
         return _Tracks(
             frame.contact_ids.copy(),
             tracks_bounds,
-            rows_points,
-            gather(np.concatenate([followed.particles, particles]), both_bounds, order)[0],
+            np.concatenate([followed.points, points])[rows],
+            np.concatenate([followed.particles, particles])[rows],
             frame.centroids.copy(),
             np.concatenate([followed.travel, np.zeros(new.size)])[order],
-            gather(np.concatenate([followed.born, born]), both_bounds, order)[0],
+            np.concatenate([followed.born, born])[rows],
             np.concatenate([followed.smoothed, frame.centroids[new]])[order],
             np.concatenate([followed.drift, np.full((new.size, 2), np.nan)])[order],
         )
@@ -461,12 +460,8 @@ def _plan_follow(
             ended[t] = False
     contacts = np.flatnonzero(follows)
     continued = track[contacts]
-    ended_rows = _rows(track_bounds, np.flatnonzero(ended))
-    previous_rows = _rows(track_bounds, continued)
-    previous_bounds = np.zeros(len(contacts) + 1, np.intp)
-    for k in range(len(contacts)):
-        t = continued[k]
-        previous_bounds[k + 1] = previous_bounds[k] + track_bounds[t + 1] - track_bounds[t]
+    ended_rows, _ = gather_rows(track_bounds, np.flatnonzero(ended))
+    previous_rows, previous_bounds = gather_rows(track_bounds, continued)
     before = track_centroids[continued]
     after = centroids[contacts]
     turn = 0.0
@@ -480,39 +475,20 @@ def _plan_follow(
     if predicted_resampling:
         chosen, chosen_bounds = gather(outlines, outline_bounds, contacts)
         starts = predicted[previous_bounds[:-1]]
-        current, current_bounds = resample_kernel(chosen, chosen_bounds, spacing, starts)
-        if current_bounds[0] < 0:  # cannot happen: every outline encloses an area
-            raise ValueError("a contact outline has zero perimeter")
+        current, current_bounds = resample_outlines(chosen, chosen_bounds, spacing, starts)
     else:
         current, current_bounds = gather(contours, contour_bounds, contacts)
     # The farthest any point of a contact moved: its centroid's step plus the turn's
     # arc at its farthest point.
+    reach = reach_from(after, current, current_bounds)
     travel = np.empty(len(contacts))
     for k in range(len(contacts)):
-        reach = 0.0
-        for i in range(current_bounds[k], current_bounds[k + 1]):
-            reach = max(reach, np.hypot(current[i, 0] - after[k, 0], current[i, 1] - after[k, 1]))
         step = np.hypot(after[k, 0] - before[k, 0], after[k, 1] - before[k, 1])
-        travel[k] = step + abs(turn) * reach
+        travel[k] = step + abs(turn) * reach[k]
     return (
         follows, ended_rows, turn, contacts, ids[contacts], after, continued, previous_rows,
         previous_bounds, predicted, current, current_bounds, travel,
     )  # fmt: skip
-
-
-@njit
-def _rows(bounds: NDArray[np.intp], tracks: NDArray[np.intp]) -> NDArray[np.intp]:
-    """The point rows of some tracks, in their order."""
-    total = 0
-    for t in tracks:
-        total += bounds[t + 1] - bounds[t]
-    rows = np.empty(total, np.intp)
-    n = 0
-    for t in tracks:
-        for i in range(bounds[t], bounds[t + 1]):
-            rows[n] = i
-            n += 1
-    return rows
 
 
 @njit

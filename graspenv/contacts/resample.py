@@ -292,10 +292,7 @@ def resample_closed_batch(
         raise ValueError(
             f"starts must have shape ({len(bounds) - 1}, 2), one row a polyline, got {starts.shape}"
         )
-    resampled, resampled_bounds = resample_kernel(points, bounds, float(spacing), starts)
-    if resampled_bounds[0] < 0:
-        raise ValueError("polyline has zero perimeter; it needs at least two distinct points")
-    return resampled, resampled_bounds
+    return resample_kernel(points, bounds, float(spacing), starts)
 
 
 @njit
@@ -305,8 +302,9 @@ def resample_kernel(
     spacing: float,
     starts: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
-    """:func:`resample_closed_batch`; bounds[0] is -1 when a polyline has zero
-    perimeter (the caller raises)."""
+    """:func:`resample_closed_batch` once its arguments are checked; raises its
+    ValueError for a polyline of zero perimeter (in the per-frame stages that cannot
+    happen: every contact outline encloses an area)."""
     count = len(bounds) - 1
     total = len(points)
     step = np.empty((total, 2))
@@ -326,7 +324,7 @@ def resample_kernel(
             along += length[i]
         perimeter[c] = along
         if not along > 0.0:
-            return np.zeros((0, 2)), np.full(count + 1, -1, np.intp)
+            raise ValueError("polyline has zero perimeter; it needs at least two distinct points")
         sizes[c] = max(int(np.rint(along / spacing)), 3)
     out_bounds = np.zeros(count + 1, np.intp)
     out_bounds[1:] = np.cumsum(sizes)
@@ -348,21 +346,6 @@ def resample_kernel(
             out[out_bounds[c] + k, 0] = points[segment, 0] + fraction * step[segment, 0]
             out[out_bounds[c] + k, 1] = points[segment, 1] + fraction * step[segment, 1]
     return out, out_bounds
-
-
-@njit
-def resample_outlines(
-    outlines: NDArray[np.float64],
-    bounds: NDArray[np.intp],
-    spacing: float,
-    starts: NDArray[np.float64],
-) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
-    """:func:`resample_kernel` for contact outlines (the per-frame stages): every
-    outline encloses an area, so a zero perimeter is a bug, raised."""
-    resampled, resampled_bounds = resample_kernel(outlines, bounds, spacing, starts)
-    if resampled_bounds[0] < 0:  # cannot happen: every outline encloses an area
-        raise ValueError("a contact outline has zero perimeter")
-    return resampled, resampled_bounds
 
 
 @njit

@@ -58,7 +58,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Literal, TypeVar
+from typing import Literal, NamedTuple, TypeVar
 
 import cv2
 import numpy as np
@@ -66,7 +66,7 @@ from numpy.typing import NDArray
 
 from graspenv.config import ContactConfig
 from graspenv.contacts.extract import components, traced_chains, validate_mask
-from graspenv.contacts.resample import gather, orient_ccw_kernel, resample_outlines
+from graspenv.contacts.resample import gather, orient_ccw_kernel, resample_kernel
 from graspenv.geometry import reach_from
 from graspenv.jit import njit
 from graspenv.surface.geometry import Surface
@@ -397,8 +397,8 @@ def _track_frame(
     outlines, _ = orient_ccw_kernel(_to_world(px_outlines, transform), bounds)
     centroids = _to_world(px_centroids, transform)
     keep, merged, parent = _match(
-        prev_centroids, prev_outlines, prev_outline_bounds, prev_ids,
-        centroids, outlines, bounds, radius,
+        _Contacts(prev_centroids, prev_outlines, prev_outline_bounds), prev_ids,
+        _Contacts(centroids, outlines, bounds), radius,
     )  # fmt: skip
     # A continuing contour starts near its previous first point moved with the
     # centroid; fresh ids go to new contacts in raster order.
@@ -418,7 +418,7 @@ def _track_frame(
             next_id += 1
             if parent[c] >= 0:
                 origins[c] = prev_ids[parent[c]]
-    contours, contour_bounds = resample_outlines(outlines, bounds, spacing, starts)
+    contours, contour_bounds = resample_kernel(outlines, bounds, spacing, starts)
     order = np.argsort(ids, kind="mergesort")
     rank = np.empty(count, np.intp)
     rank[order] = np.arange(count)
@@ -454,18 +454,26 @@ def _to_world(pixels: NDArray[np.float64], transform: NDArray[np.float64]) -> ND
 _OVERLAP = 0.25
 
 
+class _Contacts(NamedTuple):
+    """The contacts of one frame as the matching rules see them (compiled code only).
+
+    Attributes:
+        centroids: metres, world frame, shape (C, 2).
+        outlines: every outline one after another, metres, world frame, (L, 2).
+        bounds: contact i's outline is ``outlines[bounds[i]:bounds[i + 1]]``, (C + 1,).
+    """
+
+    centroids: NDArray[np.float64]
+    outlines: NDArray[np.float64]
+    bounds: NDArray[np.intp]
+
+
 @njit
 def _match(
-    prev_centroids: NDArray[np.float64],
-    prev_outlines: NDArray[np.float64],
-    prev_bounds: NDArray[np.intp],
-    prev_ids: NDArray[np.int64],
-    centroids: NDArray[np.float64],
-    outlines: NDArray[np.float64],
-    bounds: NDArray[np.intp],
-    radius: float,
+    before: _Contacts, prev_ids: NDArray[np.int64], now: _Contacts, radius: float
 ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
-    """The module docstring's rules.
+    """The module docstring's rules, from the previous frame's contacts (``before``,
+    with their ids) to this frame's (``now``).
 
     Returns:
         (keep, merged, parent): for each current contact the previous contact
@@ -473,14 +481,15 @@ def _match(
         current contact it merged into without keeping its id, or -1, shape (P,); for
         each new current contact the previous contact it split off, or -1, shape (C,).
     """
+    prev_centroids, centroids = before.centroids, now.centroids
     n_prev, n_cur = len(prev_centroids), len(centroids)
     keep = np.full(n_cur, -1, np.intp)
     merged = np.full(n_prev, -1, np.intp)
     parent = np.full(n_cur, -1, np.intp)
     if n_prev == 0 or n_cur == 0:
         return keep, merged, parent
-    prev_reach = reach_from(prev_centroids, prev_outlines, prev_bounds)
-    reach = reach_from(centroids, outlines, bounds)
+    prev_reach = reach_from(prev_centroids, before.outlines, before.bounds)
+    reach = reach_from(centroids, now.outlines, now.bounds)
     by_x = np.argsort(centroids[:, 0], kind="mergesort")
     xs = centroids[by_x, 0]
     taken = np.zeros(n_prev, np.bool_)
@@ -512,9 +521,7 @@ def _match(
             d = _distance(prev_centroids[p], centroids[c])
             if d > prev_reach[p] + reach[c] or d > best_d or (d == best_d and c > best):
                 continue
-            if _overlap(
-                prev_centroids, prev_outlines, prev_bounds, p, centroids, outlines, bounds, c
-            ):
+            if _overlap(before, p, now, c):
                 best, best_d = c, d
         if best >= 0:
             joined[p] = best
@@ -554,9 +561,7 @@ def _match(
                 continue
             if best >= 0 and (d > best_d or (d == best_d and prev_ids[p] >= best_id)):
                 continue
-            if _overlap(
-                prev_centroids, prev_outlines, prev_bounds, p, centroids, outlines, bounds, c
-            ):
+            if _overlap(before, p, now, c):
                 best, best_d, best_id = p, d, prev_ids[p]
         parent[c] = best
     return keep, merged, parent
@@ -598,22 +603,13 @@ def _near_pairs(
 
 
 @njit
-def _overlap(
-    prev_centroids: NDArray[np.float64],
-    prev_outlines: NDArray[np.float64],
-    prev_bounds: NDArray[np.intp],
-    p: int,
-    centroids: NDArray[np.float64],
-    outlines: NDArray[np.float64],
-    bounds: NDArray[np.intp],
-    c: int,
-) -> bool:
+def _overlap(before: _Contacts, p: int, now: _Contacts, c: int) -> bool:
     """Whether previous contact p and current contact c overlap (module docstring)."""
-    mine = prev_outlines[prev_bounds[p] : prev_bounds[p + 1]]
-    theirs = outlines[bounds[c] : bounds[c + 1]]
-    if _inside(centroids[c, 0], centroids[c, 1], mine):
+    mine = before.outlines[before.bounds[p] : before.bounds[p + 1]]
+    theirs = now.outlines[now.bounds[c] : now.bounds[c + 1]]
+    if _inside(now.centroids[c, 0], now.centroids[c, 1], mine):
         return True
-    if _inside(prev_centroids[p, 0], prev_centroids[p, 1], theirs):
+    if _inside(before.centroids[p, 0], before.centroids[p, 1], theirs):
         return True
     return _share_inside(mine, theirs) >= _OVERLAP or _share_inside(theirs, mine) >= _OVERLAP
 

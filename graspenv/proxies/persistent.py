@@ -49,7 +49,7 @@ from numpy.typing import NDArray
 
 from graspenv.config import ProxyConfig
 from graspenv.contacts.matching import correspond_batch
-from graspenv.contacts.resample import bounds_of, gather, gather_rows, resample_outlines
+from graspenv.contacts.resample import bounds_of, gather, gather_rows, resample_kernel
 from graspenv.contacts.tracking import ContactFrame
 from graspenv.geometry import reach_from
 from graspenv.jit import njit
@@ -475,7 +475,7 @@ def _plan_follow(
     if predicted_resampling:
         chosen, chosen_bounds = gather(outlines, outline_bounds, contacts)
         starts = predicted[previous_bounds[:-1]]
-        current, current_bounds = resample_outlines(chosen, chosen_bounds, spacing, starts)
+        current, current_bounds = resample_kernel(chosen, chosen_bounds, spacing, starts)
     else:
         current, current_bounds = gather(contours, contour_bounds, contacts)
     # The farthest any point of a contact moved: its centroid's step plus the turn's

@@ -43,6 +43,7 @@ paper's plain form: the raw previous contour matched against the tracker's conto
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -158,13 +159,11 @@ class PersistentProxies:
         proxy, layers, before = self._proxy, self._layers, self._tracks
         if len(before.ids) == 0 and len(frame) == 0:  # nothing on the table
             return ProxyCommand(np.zeros((0, layers), np.int64), np.zeros((0, 2)), np.zeros(0))
-        plan = _Plan(
-            *_plan_follow(
-                before.ids, before.bounds, before.points, before.centroids,
-                frame.contact_ids, frame.is_new, frame.centroids, frame.outlines,
-                frame.outline_bounds, frame.contours, frame.contour_bounds,
-                proxy.track_hand_rotation, proxy.predicted_resampling, self._spacing,
-            )
+        plan = _plan_follow(
+            before.ids, before.bounds, before.points, before.centroids,
+            frame.contact_ids, frame.is_new, frame.centroids, frame.outlines,
+            frame.outline_bounds, frame.contours, frame.contour_bounds,
+            proxy.track_hand_rotation, proxy.predicted_resampling, self._spacing,
         )  # fmt: skip
         # Every track no contact continues gives its particles back: lift-offs,
         # merges, reused ids.
@@ -378,9 +377,9 @@ class PersistentProxies:
         )
 
 
-@dataclass(frozen=True, eq=False)
-class _Plan:
-    """What a frame's continuing contacts need, from :func:`_plan_follow`.
+class _Plan(NamedTuple):
+    """What a frame's continuing contacts need, from :func:`_plan_follow` (which
+    builds it in compiled code).
 
     Attributes:
         follows: which contacts of the frame continue a track, shape (C,).
@@ -430,23 +429,8 @@ def _plan_follow(
     track_hand_rotation: bool,
     predicted_resampling: bool,
     spacing: float,
-) -> tuple[
-    NDArray[np.bool_],
-    NDArray[np.intp],
-    float,
-    NDArray[np.intp],
-    NDArray[np.int64],
-    NDArray[np.float64],
-    NDArray[np.intp],
-    NDArray[np.intp],
-    NDArray[np.intp],
-    NDArray[np.float64],
-    NDArray[np.float64],
-    NDArray[np.intp],
-    NDArray[np.float64],
-]:
-    """The fields of :class:`_Plan` (steps 2 and 3 of the module docstring up to the
-    matching)."""
+) -> _Plan:
+    """Steps 2 and 3 of the module docstring up to the matching."""
     count = len(ids)
     # Which track each contact continues: the same id, not new this frame.
     follows = np.zeros(count, np.bool_)
@@ -485,7 +469,7 @@ def _plan_follow(
     for k in range(len(contacts)):
         step = np.hypot(after[k, 0] - before[k, 0], after[k, 1] - before[k, 1])
         travel[k] = step + abs(turn) * reach[k]
-    return (
+    return _Plan(
         follows, ended_rows, turn, contacts, ids[contacts], after, continued, previous_rows,
         previous_bounds, predicted, current, current_bounds, travel,
     )  # fmt: skip

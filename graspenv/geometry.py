@@ -18,6 +18,7 @@ __all__ = [
     "footprint",
     "footprint_depths",
     "inscribed_radius",
+    "reach_from",
     "rotate",
     "shoelace",
     "tilt_angle",
@@ -112,6 +113,31 @@ def tilt_angle(quaternion: Sequence[float] | NDArray[np.float64]) -> float:
     axis_y = 2.0 * (y * z - w * x)
     axis_z = 1.0 - 2.0 * (x * x + y * y)
     return math.atan2(math.hypot(axis_x, axis_y), axis_z)
+
+
+@njit
+def reach_from(
+    centres: NDArray[np.float64], points: NDArray[np.float64], bounds: NDArray[np.intp]
+) -> NDArray[np.float64]:
+    """How far each of several point sets laid end to end reaches from its centre
+    (the radius of the smallest disc about the centre that holds the set).
+
+    Args:
+        centres: one point per set, shape (C, 2).
+        points: the sets one after another, same frame, shape (T, 2); set c is
+            ``points[bounds[c]:bounds[c + 1]]``.
+        bounds: shape (C + 1,).
+
+    Returns:
+        Each set's largest distance from its centre, same unit, shape (C,); 0 for
+        an empty set.
+    """
+    reach = np.zeros(len(centres))
+    for c in range(len(centres)):
+        for i in range(bounds[c], bounds[c + 1]):
+            distance = np.hypot(points[i, 0] - centres[c, 0], points[i, 1] - centres[c, 1])
+            reach[c] = max(reach[c], distance)
+    return reach
 
 
 #: Object shapes as the footprint kernel numbers them (``ObjectConfig.shape``).

@@ -22,6 +22,7 @@ __all__ = [
     "bounds_of",
     "checked_bounds",
     "gather",
+    "gather_rows",
     "orient_ccw",
     "orient_ccw_batch",
     "owners_of",
@@ -90,6 +91,25 @@ def gather(
         (gathered, gathered_bounds): ``points[bounds[order[k]]:bounds[order[k] + 1]]``
         for k = 0, 1, ... one after another, and their bounds, shape (K + 1,).
     """
+    rows, new_bounds = gather_rows(bounds, order)
+    return points[rows], new_bounds
+
+
+@njit
+def gather_rows(
+    bounds: NDArray[np.intp], order: NDArray[np.intp]
+) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """The rows :func:`gather` takes, and their bounds: for arrays laid end to end
+    that travel together (one bounds for several), index each with the same rows.
+
+    Args:
+        bounds: array c is ``points[bounds[c]:bounds[c + 1]]``, shape (C + 1,).
+        order: which arrays to take, in order, shape (K,).
+
+    Returns:
+        (rows, gathered_bounds): ``bounds[order[k]]``, ..., ``bounds[order[k] + 1] - 1``
+        for k = 0, 1, ... one after another, and their bounds, shape (K + 1,).
+    """
     new_bounds = np.zeros(len(order) + 1, np.intp)
     for k in range(len(order)):
         new_bounds[k + 1] = new_bounds[k] + bounds[order[k] + 1] - bounds[order[k]]
@@ -98,7 +118,7 @@ def gather(
         lo = bounds[order[k]]
         for i in range(new_bounds[k + 1] - new_bounds[k]):
             rows[new_bounds[k] + i] = lo + i
-    return points[rows], new_bounds
+    return rows, new_bounds
 
 
 def _as_polyline(polyline: ArrayLike, name: str = "polyline") -> NDArray[np.float64]:
@@ -272,10 +292,7 @@ def resample_closed_batch(
         raise ValueError(
             f"starts must have shape ({len(bounds) - 1}, 2), one row a polyline, got {starts.shape}"
         )
-    resampled, resampled_bounds = resample_kernel(points, bounds, float(spacing), starts)
-    if resampled_bounds[0] < 0:
-        raise ValueError("polyline has zero perimeter; it needs at least two distinct points")
-    return resampled, resampled_bounds
+    return resample_kernel(points, bounds, float(spacing), starts)
 
 
 @njit
@@ -285,8 +302,9 @@ def resample_kernel(
     spacing: float,
     starts: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
-    """:func:`resample_closed_batch`; bounds[0] is -1 when a polyline has zero
-    perimeter (the caller raises)."""
+    """:func:`resample_closed_batch` once its arguments are checked; raises its
+    ValueError for a polyline of zero perimeter (in the per-frame stages that cannot
+    happen: every contact outline encloses an area)."""
     count = len(bounds) - 1
     total = len(points)
     step = np.empty((total, 2))
@@ -306,7 +324,7 @@ def resample_kernel(
             along += length[i]
         perimeter[c] = along
         if not along > 0.0:
-            return np.zeros((0, 2)), np.full(count + 1, -1, np.intp)
+            raise ValueError("polyline has zero perimeter; it needs at least two distinct points")
         sizes[c] = max(int(np.rint(along / spacing)), 3)
     out_bounds = np.zeros(count + 1, np.intp)
     out_bounds[1:] = np.cumsum(sizes)

@@ -58,7 +58,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from typing import Literal, TypeVar
+from typing import Literal, NamedTuple, TypeVar
 
 import cv2
 import numpy as np
@@ -67,6 +67,7 @@ from numpy.typing import NDArray
 from graspenv.config import ContactConfig
 from graspenv.contacts.extract import components, traced_chains, validate_mask
 from graspenv.contacts.resample import gather, orient_ccw_kernel, resample_kernel
+from graspenv.geometry import reach_from
 from graspenv.jit import njit
 from graspenv.surface.geometry import Surface
 
@@ -393,19 +394,11 @@ def _track_frame(
         chains, chain_bounds, width, min_area
     )
     count = len(areas)
-    sx, sy, w, h = transform[0], transform[1], transform[2], transform[3]
-    outlines = np.empty_like(px_outlines)
-    for i in range(len(px_outlines)):
-        outlines[i, 0] = (px_outlines[i, 0] + 0.5) * sx - 0.5 * w
-        outlines[i, 1] = 0.5 * h - (px_outlines[i, 1] + 0.5) * sy
-    centroids = np.empty_like(px_centroids)
-    for i in range(count):
-        centroids[i, 0] = (px_centroids[i, 0] + 0.5) * sx - 0.5 * w
-        centroids[i, 1] = 0.5 * h - (px_centroids[i, 1] + 0.5) * sy
-    outlines, _ = orient_ccw_kernel(outlines, bounds)
+    outlines, _ = orient_ccw_kernel(_to_world(px_outlines, transform), bounds)
+    centroids = _to_world(px_centroids, transform)
     keep, merged, parent = _match(
-        prev_centroids, prev_outlines, prev_outline_bounds, prev_ids,
-        centroids, outlines, bounds, radius,
+        _Contacts(prev_centroids, prev_outlines, prev_outline_bounds), prev_ids,
+        _Contacts(centroids, outlines, bounds), radius,
     )  # fmt: skip
     # A continuing contour starts near its previous first point moved with the
     # centroid; fresh ids go to new contacts in raster order.
@@ -426,8 +419,6 @@ def _track_frame(
             if parent[c] >= 0:
                 origins[c] = prev_ids[parent[c]]
     contours, contour_bounds = resample_kernel(outlines, bounds, spacing, starts)
-    if contour_bounds[0] < 0:  # cannot happen: every outline encloses an area
-        raise ValueError("a contact outline has zero perimeter")
     order = np.argsort(ids, kind="mergesort")
     rank = np.empty(count, np.intp)
     rank[order] = np.arange(count)
@@ -447,22 +438,42 @@ def _track_frame(
     )  # fmt: skip
 
 
+@njit
+def _to_world(pixels: NDArray[np.float64], transform: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Pixel (column, row) points, shape (N, 2), in metres, world frame
+    (``Surface.pixel_to_world``; ``transform`` is the tracker's ``(sx, sy, w, h)``)."""
+    sx, sy, w, h = transform[0], transform[1], transform[2], transform[3]
+    world = np.empty_like(pixels)
+    for i in range(len(pixels)):
+        world[i, 0] = (pixels[i, 0] + 0.5) * sx - 0.5 * w
+        world[i, 1] = 0.5 * h - (pixels[i, 1] + 0.5) * sy
+    return world
+
+
 # At least this fraction of one outline inside the other makes two contacts overlap.
 _OVERLAP = 0.25
 
 
+class _Contacts(NamedTuple):
+    """The contacts of one frame as the matching rules see them (compiled code only).
+
+    Attributes:
+        centroids: metres, world frame, shape (C, 2).
+        outlines: every outline one after another, metres, world frame, (L, 2).
+        bounds: contact i's outline is ``outlines[bounds[i]:bounds[i + 1]]``, (C + 1,).
+    """
+
+    centroids: NDArray[np.float64]
+    outlines: NDArray[np.float64]
+    bounds: NDArray[np.intp]
+
+
 @njit
 def _match(
-    prev_centroids: NDArray[np.float64],
-    prev_outlines: NDArray[np.float64],
-    prev_bounds: NDArray[np.intp],
-    prev_ids: NDArray[np.int64],
-    centroids: NDArray[np.float64],
-    outlines: NDArray[np.float64],
-    bounds: NDArray[np.intp],
-    radius: float,
+    before: _Contacts, prev_ids: NDArray[np.int64], now: _Contacts, radius: float
 ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]:
-    """The module docstring's rules.
+    """The module docstring's rules, from the previous frame's contacts (``before``,
+    with their ids) to this frame's (``now``).
 
     Returns:
         (keep, merged, parent): for each current contact the previous contact
@@ -470,14 +481,15 @@ def _match(
         current contact it merged into without keeping its id, or -1, shape (P,); for
         each new current contact the previous contact it split off, or -1, shape (C,).
     """
+    prev_centroids, centroids = before.centroids, now.centroids
     n_prev, n_cur = len(prev_centroids), len(centroids)
     keep = np.full(n_cur, -1, np.intp)
     merged = np.full(n_prev, -1, np.intp)
     parent = np.full(n_cur, -1, np.intp)
     if n_prev == 0 or n_cur == 0:
         return keep, merged, parent
-    prev_reach = _reach(prev_centroids, prev_outlines, prev_bounds)
-    reach = _reach(centroids, outlines, bounds)
+    prev_reach = reach_from(prev_centroids, before.outlines, before.bounds)
+    reach = reach_from(centroids, now.outlines, now.bounds)
     by_x = np.argsort(centroids[:, 0], kind="mergesort")
     xs = centroids[by_x, 0]
     taken = np.zeros(n_prev, np.bool_)
@@ -509,9 +521,7 @@ def _match(
             d = _distance(prev_centroids[p], centroids[c])
             if d > prev_reach[p] + reach[c] or d > best_d or (d == best_d and c > best):
                 continue
-            if _overlap(
-                prev_centroids, prev_outlines, prev_bounds, p, centroids, outlines, bounds, c
-            ):
+            if _overlap(before, p, now, c):
                 best, best_d = c, d
         if best >= 0:
             joined[p] = best
@@ -551,9 +561,7 @@ def _match(
                 continue
             if best >= 0 and (d > best_d or (d == best_d and prev_ids[p] >= best_id)):
                 continue
-            if _overlap(
-                prev_centroids, prev_outlines, prev_bounds, p, centroids, outlines, bounds, c
-            ):
+            if _overlap(before, p, now, c):
                 best, best_d, best_id = p, d, prev_ids[p]
         parent[c] = best
     return keep, merged, parent
@@ -562,18 +570,6 @@ def _match(
 @njit
 def _distance(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
     return float(np.hypot(a[0] - b[0], a[1] - b[1]))
-
-
-@njit
-def _reach(
-    centroids: NDArray[np.float64], outlines: NDArray[np.float64], bounds: NDArray[np.intp]
-) -> NDArray[np.float64]:
-    """How far each outline reaches from its centroid, metres, shape (C,)."""
-    reach = np.zeros(len(centroids))
-    for c in range(len(centroids)):
-        for i in range(bounds[c], bounds[c + 1]):
-            reach[c] = max(reach[c], _distance(outlines[i], centroids[c]))
-    return reach
 
 
 @njit
@@ -607,22 +603,13 @@ def _near_pairs(
 
 
 @njit
-def _overlap(
-    prev_centroids: NDArray[np.float64],
-    prev_outlines: NDArray[np.float64],
-    prev_bounds: NDArray[np.intp],
-    p: int,
-    centroids: NDArray[np.float64],
-    outlines: NDArray[np.float64],
-    bounds: NDArray[np.intp],
-    c: int,
-) -> bool:
+def _overlap(before: _Contacts, p: int, now: _Contacts, c: int) -> bool:
     """Whether previous contact p and current contact c overlap (module docstring)."""
-    mine = prev_outlines[prev_bounds[p] : prev_bounds[p + 1]]
-    theirs = outlines[bounds[c] : bounds[c + 1]]
-    if _inside(centroids[c, 0], centroids[c, 1], mine):
+    mine = before.outlines[before.bounds[p] : before.bounds[p + 1]]
+    theirs = now.outlines[now.bounds[c] : now.bounds[c + 1]]
+    if _inside(now.centroids[c, 0], now.centroids[c, 1], mine):
         return True
-    if _inside(prev_centroids[p, 0], prev_centroids[p, 1], theirs):
+    if _inside(before.centroids[p, 0], before.centroids[p, 1], theirs):
         return True
     return _share_inside(mine, theirs) >= _OVERLAP or _share_inside(theirs, mine) >= _OVERLAP
 

@@ -43,14 +43,16 @@ paper's plain form: the raw previous contour matched against the tracker's conto
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ProxyConfig
 from graspenv.contacts.matching import correspond_batch
-from graspenv.contacts.resample import bounds_of, gather, resample_kernel
+from graspenv.contacts.resample import bounds_of, gather, gather_rows, resample_kernel
 from graspenv.contacts.tracking import ContactFrame
+from graspenv.geometry import reach_from
 from graspenv.jit import njit
 from graspenv.physics.world import PhysicsWorld
 from graspenv.proxies.base import ProxyCommand, rotation_kernel
@@ -157,13 +159,11 @@ class PersistentProxies:
         proxy, layers, before = self._proxy, self._layers, self._tracks
         if len(before.ids) == 0 and len(frame) == 0:  # nothing on the table
             return ProxyCommand(np.zeros((0, layers), np.int64), np.zeros((0, 2)), np.zeros(0))
-        plan = _Plan(
-            *_plan_follow(
-                before.ids, before.bounds, before.points, before.centroids,
-                frame.contact_ids, frame.is_new, frame.centroids, frame.outlines,
-                frame.outline_bounds, frame.contours, frame.contour_bounds,
-                proxy.track_hand_rotation, proxy.predicted_resampling, self._spacing,
-            )
+        plan = _plan_follow(
+            before.ids, before.bounds, before.points, before.centroids,
+            frame.contact_ids, frame.is_new, frame.centroids, frame.outlines,
+            frame.outline_bounds, frame.contours, frame.contour_bounds,
+            proxy.track_hand_rotation, proxy.predicted_resampling, self._spacing,
         )  # fmt: skip
         # Every track no contact continues gives its particles back: lift-offs,
         # merges, reused ids.
@@ -286,17 +286,15 @@ class PersistentProxies:
         # Both kinds together, then in the frame's (ascending id) order.
         both_bounds = bounds_of(np.concatenate([np.diff(followed.bounds), np.diff(bounds)]))
         order = np.argsort(np.concatenate([np.flatnonzero(follows), new]), kind="stable")
-        rows_points, tracks_bounds = gather(
-            np.concatenate([followed.points, points]), both_bounds, order
-        )
+        rows, tracks_bounds = gather_rows(both_bounds, order)
         return _Tracks(
             frame.contact_ids.copy(),
             tracks_bounds,
-            rows_points,
-            gather(np.concatenate([followed.particles, particles]), both_bounds, order)[0],
+            np.concatenate([followed.points, points])[rows],
+            np.concatenate([followed.particles, particles])[rows],
             frame.centroids.copy(),
             np.concatenate([followed.travel, np.zeros(new.size)])[order],
-            gather(np.concatenate([followed.born, born]), both_bounds, order)[0],
+            np.concatenate([followed.born, born])[rows],
             np.concatenate([followed.smoothed, frame.centroids[new]])[order],
             np.concatenate([followed.drift, np.full((new.size, 2), np.nan)])[order],
         )
@@ -379,9 +377,9 @@ class PersistentProxies:
         )
 
 
-@dataclass(frozen=True, eq=False)
-class _Plan:
-    """What a frame's continuing contacts need, from :func:`_plan_follow`.
+class _Plan(NamedTuple):
+    """What a frame's continuing contacts need, from :func:`_plan_follow` (which
+    builds it in compiled code).
 
     Attributes:
         follows: which contacts of the frame continue a track, shape (C,).
@@ -431,23 +429,8 @@ def _plan_follow(
     track_hand_rotation: bool,
     predicted_resampling: bool,
     spacing: float,
-) -> tuple[
-    NDArray[np.bool_],
-    NDArray[np.intp],
-    float,
-    NDArray[np.intp],
-    NDArray[np.int64],
-    NDArray[np.float64],
-    NDArray[np.intp],
-    NDArray[np.intp],
-    NDArray[np.intp],
-    NDArray[np.float64],
-    NDArray[np.float64],
-    NDArray[np.intp],
-    NDArray[np.float64],
-]:
-    """The fields of :class:`_Plan` (steps 2 and 3 of the module docstring up to the
-    matching)."""
+) -> _Plan:
+    """Steps 2 and 3 of the module docstring up to the matching."""
     count = len(ids)
     # Which track each contact continues: the same id, not new this frame.
     follows = np.zeros(count, np.bool_)
@@ -461,12 +444,8 @@ def _plan_follow(
             ended[t] = False
     contacts = np.flatnonzero(follows)
     continued = track[contacts]
-    ended_rows = _rows(track_bounds, np.flatnonzero(ended))
-    previous_rows = _rows(track_bounds, continued)
-    previous_bounds = np.zeros(len(contacts) + 1, np.intp)
-    for k in range(len(contacts)):
-        t = continued[k]
-        previous_bounds[k + 1] = previous_bounds[k] + track_bounds[t + 1] - track_bounds[t]
+    ended_rows, _ = gather_rows(track_bounds, np.flatnonzero(ended))
+    previous_rows, previous_bounds = gather_rows(track_bounds, continued)
     before = track_centroids[continued]
     after = centroids[contacts]
     turn = 0.0
@@ -481,38 +460,19 @@ def _plan_follow(
         chosen, chosen_bounds = gather(outlines, outline_bounds, contacts)
         starts = predicted[previous_bounds[:-1]]
         current, current_bounds = resample_kernel(chosen, chosen_bounds, spacing, starts)
-        if current_bounds[0] < 0:  # cannot happen: every outline encloses an area
-            raise ValueError("a contact outline has zero perimeter")
     else:
         current, current_bounds = gather(contours, contour_bounds, contacts)
     # The farthest any point of a contact moved: its centroid's step plus the turn's
     # arc at its farthest point.
+    reach = reach_from(after, current, current_bounds)
     travel = np.empty(len(contacts))
     for k in range(len(contacts)):
-        reach = 0.0
-        for i in range(current_bounds[k], current_bounds[k + 1]):
-            reach = max(reach, np.hypot(current[i, 0] - after[k, 0], current[i, 1] - after[k, 1]))
         step = np.hypot(after[k, 0] - before[k, 0], after[k, 1] - before[k, 1])
-        travel[k] = step + abs(turn) * reach
-    return (
+        travel[k] = step + abs(turn) * reach[k]
+    return _Plan(
         follows, ended_rows, turn, contacts, ids[contacts], after, continued, previous_rows,
         previous_bounds, predicted, current, current_bounds, travel,
     )  # fmt: skip
-
-
-@njit
-def _rows(bounds: NDArray[np.intp], tracks: NDArray[np.intp]) -> NDArray[np.intp]:
-    """The point rows of some tracks, in their order."""
-    total = 0
-    for t in tracks:
-        total += bounds[t + 1] - bounds[t]
-    rows = np.empty(total, np.intp)
-    n = 0
-    for t in tracks:
-        for i in range(bounds[t], bounds[t + 1]):
-            rows[n] = i
-            n += 1
-    return rows
 
 
 @njit

@@ -6,7 +6,8 @@ default table and lifts it again, ``--cycles`` times; each time it polls
 appears, then none). The latency is the wall time from sending the touch to the
 first state that reflects it: the WebSocket, the wait for the table's next frame
 (up to 1/60 s), the frame's work, and one HTTP round trip. The table's own frame
-time (mask, pipeline) and its dropped frames come from the same run.
+time (mask, pipeline) is then read while a pinch squeezes the box, and its dropped
+frames over the whole run.
 
 Prints a Markdown table; needs the ``serve`` extra.
 """
@@ -20,6 +21,7 @@ import statistics
 import time
 
 import aiohttp
+import numpy as np
 
 from graspenv.config import load_config
 from graspenv.live.server import serving_in_thread
@@ -52,6 +54,13 @@ async def _measure(url: str, cycles: int) -> tuple[list[float], list[float]]:
                         break
                     await asyncio.sleep(0.001)
                 await asyncio.sleep(0.05)
+        # Then a pinch squeezing the box, held for a second and a bit: the frame time
+        # of a grasp (two contacts, their particles against the box).
+        for reach in np.linspace(0.040, 0.035, 20):  # down beside it, then squeeze
+            pinch = [{"x": 0.5 + side * reach / 0.61, "y": 0.5} for side in (-1, 1)]
+            await ws.send_str(json.dumps({"type": "touches", "touches": pinch}))
+            await asyncio.sleep(1 / 60)
+        await asyncio.sleep(1.2)
     return downs, ups
 
 
@@ -75,9 +84,10 @@ def main() -> None:
     print(_row("lift (it goes)", ups))
     print()
     print(
-        f"table: {state.fps:.1f} frames/s, mean frame time {state.frame_ms:.2f} ms "
-        f"(mask and pipeline) over the last second, {state.dropped} frames dropped "
-        f"of {state.frame + state.dropped}"
+        f"table, over the last second (a pinch squeezing the box: {state.contacts} "
+        f"contacts, {state.grip_force['box']:.1f} N): {state.fps:.1f} frames/s, mean "
+        f"frame time {state.frame_ms:.2f} ms (mask and pipeline); "
+        f"{state.dropped} frames dropped of {state.frame + state.dropped} in the run"
     )
 
 

@@ -299,12 +299,38 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=_bench)
 
 
+def _serve(args: argparse.Namespace) -> int:
+    from graspenv.live.cli import run_serve
+
+    return run_serve(args, _say)
+
+
+def _add_serve(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "serve",
+        help="a live table in the browser (touch, mouse pinch) and over TUIO",
+        description="Serve the table: a page to touch at http://HOST:PORT/, GET /state, "
+        "POST /reset, and TUIO 1.1 over UDP with --tuio. Binds to loopback; "
+        "--host 0.0.0.0 exposes the table to the network.",
+    )
+    scene = p.add_mutually_exclusive_group()
+    scene.add_argument("--config", default=None, help="scene file (default: the 6 cm box)")
+    scene.add_argument("--env", default=None, metavar="ID", help="serve an environment's task")
+    p.add_argument("--seed", type=int, default=0, help="--env: the episode's seed")
+    p.add_argument("--host", default="127.0.0.1", help="address to bind (default: loopback)")
+    p.add_argument("--port", type=int, default=8000, help="HTTP port (0: any free one)")
+    p.add_argument("--tuio", type=int, default=None, metavar="PORT", help="UDP port for TUIO 1.1")
+    p.add_argument("--record", default=None, metavar="DIR", help="write the masks for replay")
+    p.set_defaults(run=_serve)
+
+
 _COMMANDS: tuple[Callable[[argparse._SubParsersAction], None], ...] = (
     _add_demo,
     _add_interactions,
     _add_replay,
     _add_gallery,
     _add_bench,
+    _add_serve,
 )
 
 
@@ -342,9 +368,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"graspenv {args.command}: error: {err}", file=sys.stderr)
         return 2
     except ModuleNotFoundError as err:
+        extras = {"matplotlib": "plots", "aiohttp": "serve", "pythonosc": "serve"}
         hint = (
-            "pip install 'graspenv[plots]'"
-            if err.name == "matplotlib"
+            f"pip install 'graspenv[{extras[err.name]}]'"
+            if err.name in extras
             else "`make train-deps` installs the training extra"
         )
         print(

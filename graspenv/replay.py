@@ -53,6 +53,7 @@ from graspenv.viz import (
 __all__ = [
     "DEFAULT_THRESHOLD",
     "IMAGE_SUFFIXES",
+    "RECORDED_SCENE",
     "ObjectTrack",
     "ReplayResult",
     "draw_table",
@@ -64,6 +65,8 @@ IMAGE_SUFFIXES = frozenset(
     {".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".pgm", ".ppm", ".pbm", ".webp"}
 )
 DEFAULT_THRESHOLD = 127
+#: The scene a recording was made in, beside its masks (``graspenv serve --record``).
+RECORDED_SCENE = "scene.json"
 
 Mask = NDArray[np.uint8]
 VideoFormat = Literal["mp4", "gif"]
@@ -503,7 +506,9 @@ def replay(
         out: folder for ``replay.mp4`` (or ``replay.gif``), ``summary.json`` and
             ``summary.txt``; created if missing, files in it overwritten.
         config: the scene: a file in ``envs_configs/``, a dict, a ``SceneConfig`` or
-            ``None`` for the built-in one. Its surface resolution is the mask size.
+            ``None``: the folder's ``scene.json`` where it has one (a recording of
+            ``graspenv serve --record``), else the built-in scene. Its surface
+            resolution is the mask size.
         fps: camera frames per second of the recording; overrides the scene's
             ``surface.fps`` (simulated seconds per mask) and is the video's rate.
             ``None`` keeps the scene's; a video reporting another rate is warned of.
@@ -541,6 +546,8 @@ def replay(
     threshold = _check_threshold(threshold)
     source = Path(source)
     out = Path(out)
+    if config is None and (source / RECORDED_SCENE).is_file():
+        config = source / RECORDED_SCENE
     scene = load_config(config) if fps is None else load_config(config, surface={"fps": fps})
     opened = _open(source)
     if (

@@ -12,7 +12,14 @@ import pytest
 PACKAGE = Path(__file__).resolve().parents[1] / "graspenv"
 
 #: The tools: the benchmarks, the demo, replay, charts and the command line.
-TOOLS = ("graspenv.bench", "graspenv.demo", "graspenv.replay", "graspenv.plots", "graspenv.cli")
+TOOLS = (
+    "graspenv.bench",
+    "graspenv.demo",
+    "graspenv.replay",
+    "graspenv.plots",
+    "graspenv.cli",
+    "graspenv.live",
+)
 
 
 def _module(path: Path) -> str:

@@ -32,7 +32,7 @@ from graspenv.config import (
     scene_from,
 )
 from graspenv.geometry import footprint, yaw_of, yaw_step
-from graspenv.simulation import Simulation
+from graspenv.simulation import FrameReport, Simulation
 from graspenv.surface.controller import ActionMode, ControllerConfig, FingerController
 from graspenv.surface.render import render_mask
 from graspenv.tasks.base import EpisodeState, RewardConfig, Task, TaskConfig, TaskEpisode
@@ -251,12 +251,47 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         self._mask = np.zeros(self._sim.surface.shape, np.uint8)
         self._yaw_unwrapped = 0.0
         self._yaw_last = 0.0
+        self._touch_frames, self._touch_success = 0, False
         self._closed = False
 
     @property
     def dt(self) -> float:
         """Simulated seconds per environment step (``frame_skip`` camera frames)."""
         return self.task.config.frame_skip / self._base_scene.surface.fps
+
+    @property
+    def simulation(self) -> Simulation:
+        """The pipeline this environment steps (:meth:`reset` rebuilds its scene)."""
+        return self._sim
+
+    @property
+    def goal(self) -> NDArray[np.float64]:
+        """This episode's goal vector (a copy)."""
+        return self._goal.copy()
+
+    def step_touch(self, mask: NDArray[np.generic]) -> tuple[FrameReport, bool]:
+        """One camera frame driven by a contact mask from outside the finger
+        controller: a person's hand at the live table (``graspenv serve --env``).
+
+        The task's disturbance pushes as in :meth:`step`; after every ``frame_skip``
+        frames the episode's state, its record and the success test advance as one
+        step's do. Returns the frame's report and the task's success as of the last
+        completed step.
+        """
+        if self._state is None:
+            raise RuntimeError("call reset() before step_touch()")
+        task = self.task
+        force = task.disturbance(self._state, self._episode)
+        if force is not None:
+            self._sim.apply_force(task.object_name, force)
+        report = self._sim.step(mask)
+        self._mask = np.asarray(mask, np.uint8)
+        self._touch_frames += 1
+        if self._touch_frames % task.config.frame_skip == 0:
+            self._state = self._read_state(self._state.step + 1)
+            self._episode = task.after_step(self._state, self._episode)
+            self._touch_success = task.is_success(self._state, self._goal, self._episode)
+        return report, self._touch_success
 
     # -- gymnasium API -----------------------------------------------------------------
 
@@ -281,6 +316,7 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         _, q = self._sim.object_pose(task.object_name)
         self._yaw_unwrapped = self._yaw_last = yaw_of(q)
         self._state = self._read_state(step=0)
+        self._touch_frames, self._touch_success = 0, False
         info = self._info(success=False, n_particles=0)
         return self._observation(), info
 

@@ -143,3 +143,37 @@ def test_turn_gesture_is_a_real_turn() -> None:
     end = math.degrees(math.atan2(-(y1[1] - x1[1]), (y1[0] - x1[0]) * TABLE[0] / TABLE[1]))
     assert abs(abs(end - start) - 90.0) < 1e-6 or abs(abs(end - start) - 270.0) < 1e-6
     assert len(events) >= round(1.5 * RATE)
+
+
+def test_a_mouse_pinch_grips_and_turns_the_box() -> None:
+    """Without a touchscreen: Shift+press puts two fingertips 8 cm apart around the
+    pointer, the wheel closes them onto the box, Shift+wheel turns them."""
+    sync_playwright, chromium = _browser()
+    with running() as live, sync_playwright() as p:  # type: ignore[operator]
+        browser = p.chromium.launch(executable_path=chromium, headless=True, args=_ARGS)
+        try:
+            page = browser.new_page(viewport={"width": 650, "height": 600})
+            page.goto(live.url)
+            page.wait_for_function("document.getElementById('status').textContent === 'connected'")
+            box = page.locator("#table").bounding_box()
+            assert box is not None
+            page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2)
+            page.keyboard.down("Shift")
+            page.mouse.down()
+            page.keyboard.up("Shift")
+            for _ in range(12):  # 8 cm to 6.8 cm: 2.4 mm into each side of the box
+                page.mouse.wheel(0, -100)
+                page.wait_for_timeout(30)
+            live.wait_frames(20)
+            gripped = live.state()
+            page.keyboard.down("Shift")
+            for _ in range(18):  # 18 notches of 5°
+                page.mouse.wheel(0, -100)
+                page.wait_for_timeout(80)
+            page.keyboard.up("Shift")
+            yaw = _settled_yaw(live)
+            page.mouse.up()
+        finally:
+            browser.close()
+    assert gripped["contacts"] == 2 and gripped["grip_force"]["box"] > 1.0
+    assert abs(abs(yaw) - TARGET) <= 2 * TOLERANCE, f"yaw {yaw:.1f}°"

@@ -92,7 +92,8 @@
   canvas.addEventListener("contextmenu", (e) => e.preventDefault());
   canvas.addEventListener("wheel", (e) => {
     e.preventDefault();
-    const step = Math.sign(e.deltaY);
+    // Some browsers turn Shift+wheel into a horizontal scroll.
+    const step = Math.sign(e.deltaY || e.deltaX);
     if (e.shiftKey) mouse.angle += step * (Math.PI / 36);           // 5° a notch
     else mouse.gap = Math.min(0.3, Math.max(0.01, mouse.gap + step * 0.001)); // 1 mm
     if (mouse.down && mouse.pinch) send();

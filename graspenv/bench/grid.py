@@ -59,7 +59,7 @@ from numpy.typing import NDArray
 from graspenv.bench.interactions import FINGER_RADIUS, pinch, with_objects
 from graspenv.bench.jobs import collect_jobs
 from graspenv.bench.playback import Played, play
-from graspenv.bench.results import write_rows
+from graspenv.bench.results import pipe_table, write_rows
 from graspenv.bench.scenarios import push_until_slip
 from graspenv.config import (
     FIDELITY_PRESETS,
@@ -123,6 +123,13 @@ class Cell:
             mass=self.mass,
             friction=self.friction,
             position=self.position,
+        )
+
+    def label(self) -> str:
+        """The object in words (progress lines): shape, footprint x height, mass."""
+        return (
+            f"{self.shape} {100 * self.footprint:g} cm x {100 * self.height:g} cm,"
+            f" {1000 * self.mass:g} g"
         )
 
     @property
@@ -372,8 +379,7 @@ def run_grid(
 def _describe(result: CellResult) -> str:
     c = result.cell
     return (
-        f"{result.map}: {c.shape} {100 * c.footprint:g} cm"
-        f" x {100 * c.height:g} cm, {1000 * c.mass:g} g, mu {c.friction:g},"
+        f"{result.map}: {c.label()}, mu {c.friction:g},"
         f" depth {1000 * c.depth:g} mm, finger {1000 * c.finger_radius:g} mm:"
         f" turn {result.turn_error_deg:+.2f} deg, slide {result.slide_error_pct:.2f} %,"
         f" slip {result.slip_error_pct:+.1f} %, margins {result.turn_margin:.1f}"
@@ -401,11 +407,17 @@ def read_csv(path: Path) -> list[CellResult]:
 def summary(results: Sequence[CellResult]) -> str:
     """Markdown: per map, the counted cells meeting each target, the worst counted
     errors, and the cells not counted."""
-    lines = [
-        "| map | turn ≤ 1° (counted) | worst turn | slide ≤ 2 % (counted) | worst slide"
-        " | slip within 5 % | worst slip | not counted |",
-        "|---|---|---|---|---|---|---|---|",
-    ]
+    header = (
+        "map",
+        "turn ≤ 1° (counted)",
+        "worst turn",
+        "slide ≤ 2 % (counted)",
+        "worst slide",
+        "slip within 5 %",
+        "worst slip",
+        "not counted",
+    )
+    table = []
     groups: dict[str, list[CellResult]] = {}
     for r in results:
         groups.setdefault(r.map, []).append(r)
@@ -418,13 +430,20 @@ def summary(results: Sequence[CellResult]) -> str:
         worst_slide = max((abs(r.slide_error_pct) for r in slides), default=math.nan)
         worst_slip = max((abs(r.slip_error_pct) for r in slips), default=math.nan)
         uncounted = sum(1 for r in rows if not (r.turn_counted and r.slide_counted))
-        lines.append(
-            f"| {name} | {sum(r.turn_ok for r in turns)}/{len(turns)} | {worst_turn:.2f}°"
-            f" | {sum(r.slide_ok for r in slides)}/{len(slides)} | {worst_slide:.2f} %"
-            f" | {sum(abs(r.slip_error_pct) <= SLIP_TARGET_PCT for r in slips)}/{len(rows)}"
-            f" | {worst_slip:.1f} % | {uncounted} |"
+        within = sum(abs(r.slip_error_pct) <= SLIP_TARGET_PCT for r in slips)
+        table.append(
+            (
+                name,
+                f"{sum(r.turn_ok for r in turns)}/{len(turns)}",
+                f"{worst_turn:.2f}°",
+                f"{sum(r.slide_ok for r in slides)}/{len(slides)}",
+                f"{worst_slide:.2f} %",
+                f"{within}/{len(rows)}",
+                f"{worst_slip:.1f} %",
+                uncounted,
+            )
         )
-    return "\n".join(lines)
+    return pipe_table(header, table)
 
 
 def _fmt(name: str, value: float) -> str:

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from graspenv.bench.results import pipe_table
 from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
 from graspenv.geometry import tilt_angle, yaw_of, yaw_step
 from graspenv.simulation import Simulation
@@ -357,14 +358,10 @@ def run_all(
 def markdown_table(results: dict[str, dict[str, dict[str, float]]]) -> str:
     """One row per scenario and figure, one column per proxy method."""
     methods = list(next(iter(results.values())))
-    lines = [
-        "| interaction | figure | expected | " + " | ".join(methods) + " |",
-        "|---|---|---|" + "---|" * len(methods),
-    ]
+    rows = []
     for name, by_method in results.items():
         expected = SCENARIOS[name][1]
         for figure in by_method[methods[0]]:
-            cells = [f"{by_method[m][figure]:.2f}" for m in methods]
-            lines.append(f"| {name} | {figure} | {expected} | " + " | ".join(cells) + " |")
+            rows.append([name, figure, expected, *(f"{by_method[m][figure]:.2f}" for m in methods)])
             expected = ""
-    return "\n".join(lines)
+    return pipe_table(["interaction", "figure", "expected", *methods], rows)

@@ -42,7 +42,7 @@ from graspenv.bench.grid import (
     placed,
 )
 from graspenv.bench.jobs import collect_jobs
-from graspenv.bench.results import write_rows
+from graspenv.bench.results import pipe_table, write_rows
 from graspenv.plots import line_chart, write_png
 from graspenv.surface.noise import TABLE_NOISE, SensorNoise
 
@@ -175,10 +175,8 @@ def run_noise(
 
 
 def _describe(run: NoiseRun) -> str:
-    c = run.cell
     return (
-        f"{run.level}, {run.cleanup}: {c.shape}"
-        f" {100 * c.footprint:g} x {100 * c.height:g} cm {1000 * c.mass:g} g,"
+        f"{run.level}, {run.cleanup}: {run.cell.label()},"
         f" seed {run.seed}: turn {run.turn_error_deg:+.2f} deg,"
         f" slide {run.slide_error_pct:.2f} %{' DROPPED' if run.dropped else ''}"
     )
@@ -194,21 +192,25 @@ def _worst(runs: Sequence[NoiseRun], level: str, cleanup: str) -> tuple[float, f
 def summary(runs: Sequence[NoiseRun]) -> str:
     """Markdown: for each level and clean-up, the worst turn and slide errors, the
     drops and whether it meets the targets."""
-    lines = [
-        f"| noise | clean-up | worst turn | worst slide | dropped | within {TURN_TARGET_DEG:g}°"
-        f" and {SLIDE_TARGET_PCT:g} % |",
-        "|---|---|---|---|---|---|",
-    ]
+    header = (
+        "noise",
+        "clean-up",
+        "worst turn",
+        "worst slide",
+        "dropped",
+        f"within {TURN_TARGET_DEG:g}° and {SLIDE_TARGET_PCT:g} %",
+    )
+    rows = []
     for level in LEVELS:
         for cleanup in CLEANUPS:
             turn, slide, dropped, n = _worst(runs, level, cleanup)
             if n == 0:
                 continue
             ok = sum(r.ok for r in runs if r.level == level and r.cleanup == cleanup)
-            lines.append(
-                f"| {level} | {cleanup} | {turn:.2f}° | {slide:.2f} % | {dropped}/{n} | {ok}/{n} |"
+            rows.append(
+                (level, cleanup, f"{turn:.2f}°", f"{slide:.2f} %", f"{dropped}/{n}", f"{ok}/{n}")
             )
-    return "\n".join(lines)
+    return pipe_table(header, rows)
 
 
 def write_csv(runs: Sequence[NoiseRun], path: Path) -> Path:

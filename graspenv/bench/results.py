@@ -3,15 +3,15 @@
 :func:`write_outputs` writes ``bench.csv`` (:func:`write_csv`; :func:`read_csv`
 reads it back to draw the table and plot again), ``bench.md``
 (:func:`markdown_table`) and ``pareto.png`` (:func:`pareto_png`).
-:func:`write_rows` writes any list of rows as CSV (the grid and noise benches use
-it too).
+:func:`write_rows` writes any list of rows as CSV and :func:`pipe_table` any table
+as Markdown (the other benches use them too).
 """
 
 from __future__ import annotations
 
 import csv
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -24,6 +24,7 @@ __all__ = [
     "Result",
     "markdown_table",
     "pareto_png",
+    "pipe_table",
     "read_csv",
     "write_csv",
     "write_outputs",
@@ -77,6 +78,18 @@ def write_rows(rows: Sequence[Mapping[str, object]], path: Path) -> Path:
         writer.writeheader()
         writer.writerows(rows)
     return path
+
+
+def pipe_table(header: Sequence[str], rows: Iterable[Sequence[object]]) -> str:
+    """A Markdown pipe table: the header, its rule, then one line per row (each cell
+    already formatted, or formatted by ``str``)."""
+    lines = [_pipe_row(header), "|" + "---|" * len(header)]
+    lines += [_pipe_row(row) for row in rows]
+    return "\n".join(lines)
+
+
+def _pipe_row(cells: Sequence[object]) -> str:
+    return "| " + " | ".join(str(cell) for cell in cells) + " |"
 
 
 def write_csv(results: Sequence[Result], path: Path) -> Path:
@@ -155,11 +168,18 @@ HEADLINE = {
 def markdown_table(results: Sequence[Result]) -> str:
     """One row per setting and scenario: speed, Bullet's share, errors (over several
     placements: the mean absolute error and, in brackets, the largest)."""
-    lines = [
-        "| setting | scenario | frames/s | × real time | Bullet share | particles "
-        "| tracking RMS (mm / px) | error vs ground truth | drift vs reference (mm) |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
+    header = (
+        "setting",
+        "scenario",
+        "frames/s",
+        "× real time",
+        "Bullet share",
+        "particles",
+        "tracking RMS (mm / px)",
+        "error vs ground truth",
+        "drift vs reference (mm)",
+    )
+    rows = []
     for r in results:
         key = HEADLINE[r.scenario]
         if key is None:
@@ -168,13 +188,20 @@ def markdown_table(results: Sequence[Result]) -> str:
             truth = f"|{key}| {r.errors[f'abs_{key}']:.2f} ({r.errors[f'max_abs_{key}']:.2f})"
         else:
             truth = f"{key} {r.errors[key]:+.2f}"
-        lines.append(
-            f"| {r.setting} | {r.scenario} | {r.fps:.0f} | {r.realtime:.1f} | "
-            f"{100 * r.bullet_share:.0f} % | {r.mean_particles:.0f} | "
-            f"{r.tracking_rms_mm:.2f} / {r.tracking_rms_px:.2f} | {truth} | "
-            f"{r.reference_drift_mm:.2f} |"
+        rows.append(
+            (
+                r.setting,
+                r.scenario,
+                f"{r.fps:.0f}",
+                f"{r.realtime:.1f}",
+                f"{100 * r.bullet_share:.0f} %",
+                f"{r.mean_particles:.0f}",
+                f"{r.tracking_rms_mm:.2f} / {r.tracking_rms_px:.2f}",
+                truth,
+                f"{r.reference_drift_mm:.2f}",
+            )
         )
-    return "\n".join(lines)
+    return pipe_table(header, rows)
 
 
 def _abs_error(result: Result, key: str) -> float:

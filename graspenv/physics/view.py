@@ -1,4 +1,5 @@
-"""Colours, cheap visual shapes and the headless 3-D view of a PhysicsWorld.
+"""Colours and cheap visual shapes for the headless 3-D view of a PhysicsWorld
+(:meth:`~graspenv.physics.world.PhysicsWorld.render`).
 
 Images come from Bullet's software TinyRenderer (``ER_TINY_RENDERER``): it needs no
 GUI, display or EGL, so it works in DIRECT mode on any machine. It draws every
@@ -15,8 +16,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pybullet as pb
-from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "FLOOR_RGBA",
@@ -26,7 +25,6 @@ __all__ = [
     "TABLE_RGBA",
     "icosahedron",
     "object_rgba",
-    "render_rgb",
 ]
 
 #: Colours (red, green, blue, alpha in [0, 1]).
@@ -43,12 +41,6 @@ OBJECT_RGBA = (
     (0.60, 0.30, 0.75, 1.0),
     (0.95, 0.85, 0.20, 1.0),
 )
-
-# Nearest distance the camera draws, metres: well under any sensible view distance.
-_NEAR = 0.01
-# The far plane lies this far beyond the target: the whole floor (4 m across) is in
-# range, parked particles (more than a kilometre away) never are.
-_FAR_BEYOND_TARGET = 10.0
 
 
 def object_rgba(index: int) -> tuple[float, float, float, float]:
@@ -92,72 +84,3 @@ def icosahedron(radius: float) -> tuple[list[list[float]], list[int]]:
         (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1),
     ]  # fmt: skip
     return vertices.tolist(), [i for face in faces for i in face]
-
-
-def render_rgb(
-    client: int,
-    width: int,
-    height: int,
-    target: ArrayLike,
-    distance: float,
-    yaw_deg: float,
-    pitch_deg: float,
-    fov: float,
-) -> NDArray[np.uint8]:
-    """Render the scene of a PyBullet client with the software renderer.
-
-    Args:
-        client: PyBullet client id.
-        width: image width, pixels, >= 1.
-        height: image height, pixels, >= 1.
-        target: the point the camera looks at, metres, world frame, shape (3,).
-        distance: camera distance from the target, metres, > 0.
-        yaw_deg: camera yaw about +z, degrees; 0 looks along +y (from the viewer's
-            side of the table), 90 along -x.
-        pitch_deg: camera pitch, degrees; negative looks down (-90: straight down).
-        fov: vertical field of view, degrees, in (0, 180).
-
-    Returns:
-        RGB image, shape (height, width, 3), uint8, row 0 at the top.
-
-    Raises:
-        ValueError: a size, the distance or the field of view is out of range, or
-            the target is not three numbers.
-    """
-    if int(width) != width or int(height) != height or width < 1 or height < 1:
-        raise ValueError(f"render needs a positive integer width and height, got {width}×{height}")
-    point = np.asarray(target, dtype=float)
-    if point.shape != (3,) or not np.all(np.isfinite(point)):
-        raise ValueError(f"render target must be 3 finite numbers (metres), got {target!r}")
-    if not distance > 0.0:
-        raise ValueError(f"render distance must be > 0 metres, got {distance}")
-    if not 0.0 < fov < 180.0:
-        raise ValueError(f"render fov must be in (0, 180) degrees, got {fov}")
-    w, h = int(width), int(height)
-    view = pb.computeViewMatrixFromYawPitchRoll(
-        cameraTargetPosition=point.tolist(),
-        distance=float(distance),
-        yaw=float(yaw_deg),
-        pitch=float(pitch_deg),
-        roll=0.0,
-        upAxisIndex=2,
-        physicsClientId=client,
-    )
-    projection = pb.computeProjectionMatrixFOV(
-        fov=float(fov),
-        aspect=w / h,
-        nearVal=_NEAR,
-        farVal=float(distance) + _FAR_BEYOND_TARGET,
-        physicsClientId=client,
-    )
-    _, _, rgba, _, _ = pb.getCameraImage(
-        w,
-        h,
-        viewMatrix=view,
-        projectionMatrix=projection,
-        renderer=pb.ER_TINY_RENDERER,
-        physicsClientId=client,
-    )
-    # PyBullet returns an ndarray when built with numpy, a flat list otherwise.
-    image = np.asarray(rgba, dtype=np.uint8).reshape(h, w, 4)
-    return np.ascontiguousarray(image[:, :, :3])

@@ -13,10 +13,11 @@ Bullet settings are applied, and why); :class:`~graspenv.physics.pool.ParticlePo
 and :class:`~graspenv.physics.rigid.RigidBodies` hold the proxies;
 :class:`~graspenv.physics.rays.RayCaster` casts the rays under points and
 particles; :class:`~graspenv.physics.stepping.FrameStepper` runs a frame's
-sub-steps and the pushes on objects; :func:`~graspenv.physics.teleport.teleport`
-sets an object's pose and velocity; :mod:`~graspenv.physics.reports` holds what
-the queries return. This module keeps the one public class, the objects' states,
-and the per-frame particle drive (:meth:`PhysicsWorld.step_frame`).
+sub-steps and the pushes on objects; :mod:`~graspenv.physics.view` gives the bodies
+their colours and the particles their cheap mesh; :mod:`~graspenv.physics.reports`
+holds what the queries return. This module keeps the one public class, the
+objects' states (read, and set by teleporting), the per-frame particle drive
+(:meth:`PhysicsWorld.step_frame`) and the 3-D view.
 
 The time step is ``1 / (surface.fps · physics.substeps)``, sub-stepped in Python:
 the particle force is recomputed before every ``stepSimulation``. Bullet's own
@@ -58,8 +59,6 @@ from graspenv.physics.reports import (
 )
 from graspenv.physics.rigid import RigidBodies
 from graspenv.physics.stepping import FrameStepper
-from graspenv.physics.teleport import teleport
-from graspenv.physics.view import render_rgb
 
 __all__ = [
     "EDGE_RADIUS",
@@ -69,6 +68,13 @@ __all__ = [
     "PhysicsWorld",
     "RayHits",
 ]
+
+# The camera of :meth:`PhysicsWorld.render`. Nearest distance it draws, metres: well
+# under any sensible view distance.
+_NEAR = 0.01
+# The far plane lies this far beyond the target: the whole floor (4 m across) is in
+# range, parked particles (more than a kilometre away) never are.
+_FAR_BEYOND_TARGET = 10.0
 
 
 class PhysicsWorld:
@@ -361,19 +367,67 @@ class PhysicsWorld:
                 ``angular_velocity``.
         """
         index = self.object_index(name)
-        changed = teleport(
-            self.client,
-            self._object_bodies[index],
-            self.scene.objects[index],
-            position,
-            yaw,
-            linear_velocity,
-            angular_velocity,
-            rolling=rolling,
-            orientation=orientation,
+        body, config = self._object_bodies[index], self.scene.objects[index]
+        # Check everything before changing anything: a bad value leaves the object be.
+        given_position = (
+            None if position is None else _finite(name, "position", position, ((2,), (3,)))
         )
-        if changed:
-            self._states = None
+        if yaw is not None and not math.isfinite(yaw):
+            raise ValueError(f"yaw for {name!r} must be finite (radians), got {yaw!r}")
+        given_orientation = (
+            None if orientation is None else _finite(name, "orientation", orientation, ((4,),))
+        )
+        if given_orientation is not None:
+            if yaw is not None:
+                raise ValueError("pass either yaw or orientation, not both")
+            length = float(np.linalg.norm(given_orientation))
+            if length == 0.0:
+                raise ValueError(f"orientation for {name!r} must be a non-zero quaternion")
+            given_orientation /= length
+        given_linear = (
+            None
+            if linear_velocity is None
+            else _finite(name, "linear_velocity", linear_velocity, ((3,),))
+        )
+        given_angular = (
+            None
+            if angular_velocity is None
+            else _finite(name, "angular_velocity", angular_velocity, ((3,),))
+        )
+        if rolling:
+            if config.shape != "sphere":
+                raise ValueError(f"rolling needs a sphere; {name!r} is a {config.shape}")
+            if angular_velocity is not None:
+                raise ValueError("pass either rolling=True or angular_velocity, not both")
+        moves = position is not None or yaw is not None or given_orientation is not None
+        if not moves and given_linear is None and given_angular is None and not rolling:
+            return
+        now_linear, now_angular = pb.getBaseVelocity(body, physicsClientId=self.client)
+        linear = np.array(now_linear) if given_linear is None else given_linear
+        angular = np.array(now_angular) if given_angular is None else given_angular
+        if rolling:
+            radius = config.size[0]
+            # No slip where the sphere touches the table: v + ω × (−r ẑ) = 0.
+            angular = np.array([-linear[1] / radius, linear[0] / radius, 0.0])
+        if moves:
+            now_position, quaternion = pb.getBasePositionAndOrientation(
+                body, physicsClientId=self.client
+            )
+            xyz = np.array(now_position)
+            if given_position is not None:
+                xyz = given_position
+                if xyz.shape == (2,):
+                    xyz = np.append(xyz, config.height / 2)
+            if yaw is not None:
+                quaternion = pb.getQuaternionFromEuler((0.0, 0.0, float(yaw)))
+            elif given_orientation is not None:
+                quaternion = tuple(given_orientation.tolist())
+            # This also zeroes the body's velocity, which is set again below.
+            pb.resetBasePositionAndOrientation(
+                body, xyz.tolist(), quaternion, physicsClientId=self.client
+            )
+        pb.resetBaseVelocity(body, linear.tolist(), angular.tolist(), physicsClientId=self.client)
+        self._states = None
 
     # -- pictures --------------------------------------------------------------------
 
@@ -394,19 +448,61 @@ class PhysicsWorld:
         particles lie beyond the far clipping plane and never show.
 
         Args:
-            width: image width, pixels.
-            height: image height, pixels.
+            width: image width, pixels, >= 1.
+            height: image height, pixels, >= 1.
             target: the point the camera looks at, metres, world frame, shape (3,).
-            distance: camera distance from the target, metres.
+            distance: camera distance from the target, metres, > 0.
             yaw_deg: camera yaw, degrees; 0 looks along +y from the viewer's side
                 of the table (x to the right), 90 looks along -x.
             pitch_deg: degrees; negative looks down, -90 straight down.
-            fov: vertical field of view, degrees.
+            fov: vertical field of view, degrees, in (0, 180).
 
         Returns:
-            RGB image, shape (height, width, 3), uint8.
+            RGB image, shape (height, width, 3), uint8, row 0 at the top.
+
+        Raises:
+            ValueError: a size, the distance or the field of view is out of range, or
+                the target is not three numbers.
         """
-        return render_rgb(self.client, width, height, target, distance, yaw_deg, pitch_deg, fov)
+        if int(width) != width or int(height) != height or width < 1 or height < 1:
+            raise ValueError(
+                f"render needs a positive integer width and height, got {width}×{height}"
+            )
+        point = np.asarray(target, dtype=float)
+        if point.shape != (3,) or not np.all(np.isfinite(point)):
+            raise ValueError(f"render target must be 3 finite numbers (metres), got {target!r}")
+        if not distance > 0.0:
+            raise ValueError(f"render distance must be > 0 metres, got {distance}")
+        if not 0.0 < fov < 180.0:
+            raise ValueError(f"render fov must be in (0, 180) degrees, got {fov}")
+        w, h = int(width), int(height)
+        view = pb.computeViewMatrixFromYawPitchRoll(
+            cameraTargetPosition=point.tolist(),
+            distance=float(distance),
+            yaw=float(yaw_deg),
+            pitch=float(pitch_deg),
+            roll=0.0,
+            upAxisIndex=2,
+            physicsClientId=self.client,
+        )
+        projection = pb.computeProjectionMatrixFOV(
+            fov=float(fov),
+            aspect=w / h,
+            nearVal=_NEAR,
+            farVal=float(distance) + _FAR_BEYOND_TARGET,
+            physicsClientId=self.client,
+        )
+        _, _, rgba, _, _ = pb.getCameraImage(
+            w,
+            h,
+            viewMatrix=view,
+            projectionMatrix=projection,
+            renderer=pb.ER_TINY_RENDERER,
+            physicsClientId=self.client,
+        )
+        # PyBullet returns an ndarray when built with numpy, a flat list otherwise.
+        image = np.asarray(rgba, dtype=np.uint8).reshape(h, w, 4)
+        return np.ascontiguousarray(image[:, :, :3])
 
     # -- queries ---------------------------------------------------------------------
 
@@ -653,3 +749,14 @@ class PhysicsWorld:
         points = np.asarray(xy, dtype=float).reshape(-1, 2)
         top = self._rays.top()
         return self._rays.support_heights(np.column_stack([points, np.full(len(points), top)]))
+
+
+def _finite(
+    name: str, what: str, value: ArrayLike, shapes: tuple[tuple[int, ...], ...]
+) -> NDArray[np.float64]:
+    """``value`` as a float array of one of ``shapes``, all finite, or a ValueError."""
+    array = np.asarray(value, dtype=float)
+    if array.shape not in shapes or not np.all(np.isfinite(array)):
+        expected = " or ".join(str(s) for s in shapes)
+        raise ValueError(f"{what} for {name!r} must be finite with shape {expected}, got {value!r}")
+    return array.copy()

@@ -310,10 +310,24 @@ def _frames(value: int, name: str) -> int:
     return _checks.count(value, name, minimum=0)
 
 
-def _pinch_phases(
-    hand: Hand, approach: float, settle_frames: int, squeeze_frames: int
-) -> list[Phase]:
-    """Touch down, then move both fingertips towards each other by ``approach``."""
+def _pinch(
+    centre: ArrayLike,
+    gap: float,
+    finger_radius: float,
+    axis_angle: float,
+    approach: float,
+    settle_frames: int,
+    squeeze_frames: int,
+) -> tuple[Hand, list[Phase]]:
+    """The pinch builders' start: :func:`pinch_hand` and its ``touch`` and ``squeeze``.
+
+    The arguments are the builders' own (see :func:`two_finger_pinch`).
+
+    Returns:
+        (hand, phases): the lifted fingertips, and the phases that touch down, then
+        move both fingertips towards each other by ``approach``.
+    """
+    hand = pinch_hand(centre, gap, finger_radius, axis_angle)
     depth = _checks.non_negative(approach, "approach")
     inward = hand["index"].centre - hand["thumb"].centre
     inward /= np.linalg.norm(inward)
@@ -336,7 +350,7 @@ def _pinch_phases(
         raise ValueError("squeeze_frames must be >= 1 when approach > 0")
     if not phases:
         raise ValueError("settle_frames and squeeze_frames cannot both be 0")
-    return phases
+    return hand, phases
 
 
 def _hold(frames: int) -> list[Phase]:
@@ -350,17 +364,25 @@ def _lift(names: Sequence[str], frames: int, phase_name: str = "lift") -> list[P
 
 
 def _index_stroke(
-    settle_frames: int, move_frames: int, translation: ArrayLike, name: str, lift_frames: int
-) -> list[Phase]:
-    """Phases ``touch``, ``name`` (the ``index`` fingertip moves by ``translation``,
-    metres, world frame, (x, y)), ``lift``; ``move_frames`` is checked as ``{name}_frames``."""
+    tip: Fingertip,
+    settle_frames: int,
+    move_frames: int,
+    translation: ArrayLike,
+    name: str,
+    lift_frames: int,
+) -> Script:
+    """A hand of one lifted fingertip, ``index``, and the phases ``touch``, ``name``
+    (it moves by ``translation``, metres, world frame, (x, y)), ``lift``;
+    ``move_frames`` is checked as ``{name}_frames``."""
+    hand = Hand()
+    hand.add("index", tip, touching=False)
     phases = []
     if _frames(settle_frames, "settle_frames"):
         phases.append(Phase(settle_frames, {"index": FingerMotion(touching=True)}, name="touch"))
     frames = _checks.count(move_frames, f"{name}_frames", minimum=1)
     move = FingerMotion(touching=True, translation=_pair(translation, "translation"))
     phases.append(Phase(frames, {"index": move}, name=name))
-    return phases + _lift(["index"], lift_frames)
+    return Script(hand, phases + _lift(["index"], lift_frames))
 
 
 def two_finger_pinch(
@@ -401,8 +423,9 @@ def two_finger_pinch(
         ValueError: a size is not positive, a duration is negative, or a motion is
             asked of a phase with 0 frames.
     """
-    hand = pinch_hand(centre, gap, finger_radius, axis_angle)
-    phases = _pinch_phases(hand, approach, settle_frames, squeeze_frames)
+    hand, phases = _pinch(
+        centre, gap, finger_radius, axis_angle, approach, settle_frames, squeeze_frames
+    )
     angle = _checks.finite(turn, "turn")
     shift = _pair(slide, "slide")
     pair = ("thumb", "index")
@@ -444,8 +467,9 @@ def release(
         settle_frames, squeeze_frames, hold_frames, stagger_frames, lift_frames:
             durations, camera frames.
     """
-    hand = pinch_hand(centre, gap, finger_radius, axis_angle)
-    phases = _pinch_phases(hand, approach, settle_frames, squeeze_frames)
+    hand, phases = _pinch(
+        centre, gap, finger_radius, axis_angle, approach, settle_frames, squeeze_frames
+    )
     phases += _hold(hold_frames)
     phases += _lift(["index"], _frames(stagger_frames, "stagger_frames"), "lift index")
     phases += _lift(["thumb", "index"], lift_frames)
@@ -481,11 +505,12 @@ def third_finger_push(
         settle_frames, squeeze_frames, push_frames, hold_frames, lift_frames:
             durations, camera frames.
     """
-    hand = pinch_hand(centre, gap, finger_radius, axis_angle)
+    hand, phases = _pinch(
+        centre, gap, finger_radius, axis_angle, approach, settle_frames, squeeze_frames
+    )
     radius = _checks.positive(finger_radius, "finger_radius")
     start = _checks.vector2(push_start, "push_start")
     hand.add("middle", Fingertip(start, radii=(radius, radius)), touching=False)
-    phases = _pinch_phases(hand, approach, settle_frames, squeeze_frames)
     phases.append(
         Phase(
             _checks.count(push_frames, "push_frames", minimum=1),
@@ -529,10 +554,7 @@ def side_strike(
     before = _checks.non_negative(clearance, "clearance")
     travel = before + _checks.non_negative(depth, "depth")
     tip = Fingertip(point - (before + radius) * heading, direction, radii=(radius, radius))
-    hand = Hand()
-    hand.add("index", tip, touching=False)
-    phases = _index_stroke(settle_frames, strike_frames, travel * heading, "strike", lift_frames)
-    return Script(hand, phases)
+    return _index_stroke(tip, settle_frames, strike_frames, travel * heading, "strike", lift_frames)
 
 
 def top_rub(
@@ -559,7 +581,4 @@ def top_rub(
     """
     radius = _checks.positive(finger_radius, "finger_radius")
     tip = Fingertip(_checks.vector2(start, "start"), radii=(radius, radius), press=press)
-    hand = Hand()
-    hand.add("index", tip, touching=False)
-    phases = _index_stroke(settle_frames, rub_frames, translation, "rub", lift_frames)
-    return Script(hand, phases)
+    return _index_stroke(tip, settle_frames, rub_frames, translation, "rub", lift_frames)

@@ -31,6 +31,7 @@ __all__ = [
     "InputError",
     "Touch",
     "TouchBoard",
+    "checked_number",
     "parse_touches",
 ]
 
@@ -81,7 +82,12 @@ class Touch:
         return Fingertip(centre, angle=-self.angle, radii=radii)
 
 
-def _number(value: Any, name: str, low: float, high: float) -> float:
+def checked_number(value: Any, name: str, low: float, high: float) -> float:
+    """``value`` as a float, if it is a finite number (not a bool) in [low, high].
+
+    Raises:
+        InputError: naming ``name``.
+    """
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise InputError(f"{name} must be a number, got {type(value).__name__}")
     number = float(value)
@@ -93,7 +99,7 @@ def _number(value: Any, name: str, low: float, high: float) -> float:
 def _radius(value: Any, name: str) -> float | None:
     if value is None:
         return None
-    radius = _number(value, name, 0.0, 1.0)
+    radius = checked_number(value, name, 0.0, 1.0)
     return radius if radius > 0.0 else None
 
 
@@ -115,11 +121,11 @@ def parse_touches(items: Any) -> list[Touch]:
             raise InputError(f"touch {i} must be an object")
         touches.append(
             Touch(
-                x=_number(item.get("x"), f"touch {i}: x", 0.0, 1.0),
-                y=_number(item.get("y"), f"touch {i}: y", 0.0, 1.0),
+                x=checked_number(item.get("x"), f"touch {i}: x", 0.0, 1.0),
+                y=checked_number(item.get("y"), f"touch {i}: y", 0.0, 1.0),
                 rx=_radius(item.get("rx"), f"touch {i}: rx"),
                 ry=_radius(item.get("ry"), f"touch {i}: ry"),
-                angle=_number(item.get("angle", 0.0), f"touch {i}: angle", -7.0, 7.0),
+                angle=checked_number(item.get("angle", 0.0), f"touch {i}: angle", -7.0, 7.0),
             )
         )
     return touches

@@ -38,7 +38,7 @@ from typing import Any
 
 from pythonosc.osc_packet import OscPacket
 
-from graspenv.live.touches import MAX_TOUCHES, InputError, Touch, TouchBoard
+from graspenv.live.touches import MAX_TOUCHES, InputError, Touch, TouchBoard, checked_number
 
 __all__ = ["MAX_DATAGRAM", "SOURCE_TIMEOUT", "TuioReceiver"]
 
@@ -70,27 +70,18 @@ def _int(value: Any, name: str) -> int:
     return value
 
 
-def _real(value: Any, name: str, low: float, high: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
-        raise InputError(f"{name} must be a number")
-    number = float(value)
-    if not math.isfinite(number) or not low <= number <= high:
-        raise InputError(f"{name} must be finite and in [{low}, {high}], got {value!r}")
-    return number
-
-
 def _touch(address: str, args: list[Any]) -> tuple[int, Touch]:
     """The session id and touch of one ``set`` message's arguments (after ``set``)."""
     if len(args) != _PROFILES[address]:
         raise InputError(f"{address} set takes {_PROFILES[address]} arguments, got {len(args)}")
     session = _int(args[0], "session id")
-    x = _real(args[1], "x", 0.0, 1.0)
-    y = _real(args[2], "y", 0.0, 1.0)
+    x = checked_number(args[1], "x", 0.0, 1.0)
+    y = checked_number(args[2], "y", 0.0, 1.0)
     if address == "/tuio/2Dcur":
         return session, Touch(x, y)
-    angle = _real(args[3], "angle", -2.0 * math.pi, 2.0 * math.pi)
-    width = _real(args[4], "width", 0.0, 1.0)
-    height = _real(args[5], "height", 0.0, 1.0)
+    angle = checked_number(args[3], "angle", -2.0 * math.pi, 2.0 * math.pi)
+    width = checked_number(args[4], "width", 0.0, 1.0)
+    height = checked_number(args[5], "height", 0.0, 1.0)
     return session, Touch(x, y, rx=0.5 * width or None, ry=0.5 * height or None, angle=angle)
 
 

@@ -154,16 +154,9 @@ def _add_gallery(sub: argparse._SubParsersAction) -> None:
 
 
 def _bench(args: argparse.Namespace) -> int:
-    from graspenv.bench.frontier import (
-        QUICK_SCENARIOS,
-        QUICK_SETTINGS,
-        SCENARIOS,
-        SETTINGS,
-        markdown_table,
-        read_csv,
-        run_bench,
-        write_outputs,
-    )
+    from graspenv.bench.frontier import QUICK_SCENARIOS, QUICK_SETTINGS, SETTINGS, run_bench
+    from graspenv.bench.results import markdown_table, read_csv, write_outputs
+    from graspenv.bench.scenarios import SCENARIOS
 
     if args.speed:
         from graspenv.bench.speed import run_speed

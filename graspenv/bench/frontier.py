@@ -36,82 +36,25 @@ from typing import Any
 
 import numpy as np
 
-from graspenv.bench.playback import Played, Points, play
+from graspenv.bench.playback import Played
 from graspenv.bench.results import (
-    HEADLINE,
-    PRESET_LABELS,
     Result,
-    markdown_table,
-    pareto_png,
-    read_csv,
-    write_csv,
-    write_outputs,
-    write_rows,
 )
 from graspenv.bench.scenarios import (
-    CREEP_DISTANCE,
-    DEPTH,
-    FLAT_BOX,
-    NOISE,
     SCENARIOS,
-    SLIP_FRAMES,
-    SLIP_RATE,
-    SLIP_SPEED,
     Offset,
-    Scenario,
-    flick,
-    noisy,
     placement_offsets,
-    push_until_slip,
-    slide,
-    slip,
-    turn,
-    turn_scene,
-    two_hands,
-    two_hands_scene,
 )
 from graspenv.config import FIDELITY_PRESETS, SceneConfig, load_config
 
 __all__ = [
-    "CREEP_DISTANCE",
-    "DEPTH",
-    "FLAT_BOX",
-    "HEADLINE",
-    "NOISE",
-    "PRESET_LABELS",
     "QUICK_SCENARIOS",
     "QUICK_SETTINGS",
     "REFERENCE",
-    "SCENARIOS",
     "SETTINGS",
-    "SLIP_FRAMES",
-    "SLIP_RATE",
-    "SLIP_SPEED",
-    "Offset",
-    "Played",
-    "Points",
-    "Result",
-    "Scenario",
-    "flick",
-    "markdown_table",
     "measure",
     "measure_reference_row",
-    "noisy",
-    "pareto_png",
-    "placement_offsets",
-    "play",
-    "push_until_slip",
-    "read_csv",
     "run_bench",
-    "slide",
-    "slip",
-    "turn",
-    "turn_scene",
-    "two_hands",
-    "two_hands_scene",
-    "write_csv",
-    "write_outputs",
-    "write_rows",
 ]
 
 #: The reference fidelity (graspenv/config.py, FIDELITY_PRESETS, says what it holds).

@@ -15,7 +15,7 @@ import sys
 
 import numpy as np
 
-from graspenv.bench import frontier
+from graspenv.bench import scenarios
 from graspenv.config import load_config
 
 #: The error each scenario is judged by.
@@ -34,8 +34,8 @@ def main(argv: list[str]) -> None:
     base = load_config(None, **overrides)
     values = np.array(
         [
-            frontier.SCENARIOS[scenario](base, offset).errors[ERRORS[scenario]]
-            for offset in frontier.placement_offsets(count, base)
+            scenarios.SCENARIOS[scenario](base, offset).errors[ERRORS[scenario]]
+            for offset in scenarios.placement_offsets(count, base)
         ]
     )
     size = np.abs(values)

@@ -1,6 +1,6 @@
 """The speck filter (``contacts.min_area``) against sensor noise, measured.
 
-1. The canonical turn (``graspenv.bench.frontier.turn_scene``) seen through flipped
+1. The canonical turn (``graspenv.bench.scenarios.turn_scene``) seen through flipped
    pixels (``SensorNoise.salt_pepper``), at several filter sizes: contacts a frame
    and the box's yaw error at the end of the turn.
 2. The bench's noisy turn (holes, jitter, blur; no flipped pixels) on a 320 × 240
@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from graspenv.bench import frontier
+from graspenv.bench import scenarios
 from graspenv.config import load_config
 from graspenv.geometry import yaw_of
 from graspenv.simulation import Simulation
@@ -30,7 +30,7 @@ def flipped_pixels() -> None:
     base = load_config(None)
     for salt in (0.0, 0.0005, 0.002):
         for area in (0.0, 2.0, 4.0, 9.0):
-            scene, script = frontier.turn_scene(base.replace(contacts={"min_area": area}))
+            scene, script = scenarios.turn_scene(base.replace(contacts={"min_area": area}))
             noise = SensorNoise(salt_pepper=salt)
             rng = np.random.default_rng(0)
             with Simulation(scene) as sim:
@@ -49,8 +49,8 @@ def low_resolution(placements: int = 12) -> None:
     for area in (0.0, 2.0, 4.0):
         base = load_config(None, surface={"resolution": [320, 240]}, contacts={"min_area": area})
         errors = [
-            abs(frontier.noisy(base, offset).errors["yaw_error_deg"])
-            for offset in frontier.placement_offsets(placements, base)
+            abs(scenarios.noisy(base, offset).errors["yaw_error_deg"])
+            for offset in scenarios.placement_offsets(placements, base)
         ]
         print(f"| {area:g} | {np.mean(errors):.2f}° | {np.max(errors):.2f}° |")
 

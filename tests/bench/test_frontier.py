@@ -12,15 +12,9 @@ from pathlib import Path
 import cv2
 import pytest
 
-from graspenv.bench.frontier import (
-    SCENARIOS,
-    SETTINGS,
-    read_csv,
-    run_bench,
-    slip,
-    turn,
-    write_outputs,
-)
+from graspenv.bench.frontier import SETTINGS, run_bench
+from graspenv.bench.results import read_csv, write_outputs
+from graspenv.bench.scenarios import SCENARIOS, slip, turn
 from graspenv.config import SceneConfig, load_config
 from graspenv.plots import pareto_front
 

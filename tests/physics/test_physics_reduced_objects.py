@@ -17,7 +17,7 @@ import pybullet as pb
 import pytest
 
 from graspenv.bench import grid
-from graspenv.bench.frontier import push_until_slip
+from graspenv.bench.scenarios import push_until_slip
 from graspenv.config import load_config
 
 HALF = (0.03, 0.03, 0.015)  # the 6 x 6 x 3 cm box

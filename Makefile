@@ -26,7 +26,7 @@ $(VENV)/.runtime: pyproject.toml | $(VENV)/bin/python
 # on pyproject.toml: a changed package layout (agents/ installs as graspenv_agents)
 # reinstalls.
 $(VENV)/.dev: pyproject.toml $(VENV)/.runtime
-	$(PIP) $(TORCH) -e '.[dev,train,serve]'
+	$(PIP) $(TORCH) -e '.[dev,train,serve,ray]'
 	touch $@
 
 # The live table's browser test drives Debian's chromium (Playwright cannot download

@@ -27,6 +27,11 @@ class Agent:
     def reset(self) -> None:
         """Forget the episode (nothing to forget unless a subclass keeps a memory)."""
 
+    def seed(self, seed: int) -> None:
+        """Seed what the agent draws at random for the episode that starts (nothing
+        unless a subclass draws): every episode's actions then follow from its own
+        seed, whichever episodes ran before it in the same process."""
+
     def _action(self, observation: Any, deterministic: bool) -> NDArray[np.float32]:
         """The action for ``observation``: one, or a batch of one from a VecEnv."""
         raise NotImplementedError

@@ -16,11 +16,25 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["add_compare", "add_eval", "add_train"]
+__all__ = ["add_compare", "add_eval", "add_train", "add_tune"]
 
 
 def _say(line: str) -> None:
     print(line, file=sys.stderr, flush=True)
+
+
+def _add_ray(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--ray",
+        action="store_true",
+        help="run batches of episodes as Ray tasks (a local instance on this machine's cores)",
+    )
+    p.add_argument(
+        "--address",
+        default=None,
+        metavar="HOST:PORT",
+        help="with Ray: an existing cluster (`ray start --head` prints it; implies --ray)",
+    )
 
 
 def _check_episodes(episodes: int) -> None:
@@ -95,7 +109,15 @@ def _eval(args: argparse.Namespace) -> int:
         raise ValueError(f"--env is needed for agent {args.agent!r}")
     seeds = range(first, first + args.episodes)
     report = _progress(f"{agent.label} on {env_id}")
-    result = evaluate(env_id, agent, seeds, args.config, report, args.video)
+    if args.ray or args.address:
+        if args.video:
+            raise ValueError("--video records locally: run it without --ray")
+        from .distributed import evaluations
+
+        found, _ = evaluations([(env_id, args.agent)], seeds, args.config, args.address)
+        result = found[env_id, args.agent]
+    else:
+        result = evaluate(env_id, agent, seeds, args.config, report, args.video)
     print(summary_table([result.summary()]))
     out = Path(args.out or f"runs/eval/{env_id.split('/')[-1]}-{agent.label.split(' ')[0]}")
     for path in [*result.write(out), *([Path(args.video)] if args.video else [])]:
@@ -115,6 +137,7 @@ def add_eval(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--config", default=None, help="environment file (default: built-in)")
     p.add_argument("--out", default=None, help="folder for episodes.csv and summary.json")
     p.add_argument("--video", default=None, help="record the first episode (.mp4 or .gif)")
+    _add_ray(p)
     p.set_defaults(run=_eval)
 
 
@@ -122,7 +145,17 @@ def _compare(args: argparse.Namespace) -> int:
     from .compare import compare  # as in _eval
 
     _check_episodes(args.episodes)
-    result = compare(args.env, args.agent, args.episodes, args.seed, Path(args.out), progress=_say)
+    result = compare(
+        args.env,
+        args.agent,
+        args.episodes,
+        args.seed,
+        Path(args.out),
+        progress=_say,
+        workers=args.workers,
+        ray=args.ray,
+        address=args.address,
+    )
     print(result.table)
     for path in result.files:
         print(f"wrote {path}")
@@ -144,4 +177,53 @@ def add_compare(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--episodes", type=int, default=100)
     p.add_argument("--seed", type=int, default=1000, help="first episode seed")
     p.add_argument("--out", default="runs/compare", help="folder for the table, CSV and chart")
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="processes at once (default: one per core; with --ray, the local instance's CPUs)",
+    )
+    _add_ray(p)
     p.set_defaults(run=_compare)
+
+
+def _tune(args: argparse.Namespace) -> int:
+    from .tune import tune  # as in _eval: Ray, stable-baselines3 and torch load here
+
+    result = tune(
+        args.env,
+        args.algo,
+        args.space,
+        trials=args.trials,
+        out=args.out,
+        seed=args.seed,
+        config=args.config,
+        address=args.address,
+        say=_say,
+    )
+    print(f"best of {result.trials} trials: success {result.best_success:.2f}")
+    for path in result.files:
+        print(f"wrote {path}")
+    return 0
+
+
+def add_tune(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "tune",
+        help="a hyperparameter sweep of a baseline with Ray Tune (ASHA; best.toml for train)",
+    )
+    p.add_argument("--env", required=True, help="environment id, e.g. graspenv/TurnInPlace-v0")
+    p.add_argument("--algo", required=True, choices=("ppo", "sac"))
+    p.add_argument(
+        "--space",
+        required=True,
+        help="search space file (e.g. agents/hyperparams/tune/sac.toml)",
+    )
+    p.add_argument("--trials", type=int, default=8, help="configurations to draw")
+    p.add_argument("--seed", type=int, default=0, help="every trial's training seed")
+    p.add_argument(
+        "--config", default=None, help="hyperparameter file to start from (default: ALGO.toml)"
+    )
+    p.add_argument("--out", default="runs/tune", help="folder for trials, sweep.csv, best.toml")
+    p.add_argument("--address", default=None, metavar="HOST:PORT", help="an existing Ray cluster")
+    p.set_defaults(run=_tune)

@@ -77,20 +77,38 @@ def compare(
     out: Path,
     progress: Callable[[str], None] | None = None,
     workers: int | None = None,
+    ray: bool = False,
+    address: str | None = None,
+    batch: int | None = None,
 ) -> CompareResult:
-    """Run the benchmark and write its files into ``out``."""
+    """Run the benchmark and write its files into ``out``: in ``workers`` local
+    processes, one (environment, agent) pair each, or with ``ray`` as batches of
+    episodes on Ray (:mod:`graspenv_agents.distributed`; a local instance, or the
+    cluster at ``address``; ``batch`` episodes a task), which gives the same table."""
+    if workers is not None and workers < 1:
+        raise ValueError(f"workers must be at least 1, got {workers}")
     pairs = plan(env_ids, specs)
     seeds = list(range(first_seed, first_seed + episodes))
-    workers = workers or min(len(os.sched_getaffinity(0)), len(pairs))
     results: dict[tuple[str, str], dict[str, Any]] = {}
-    if workers <= 1:
+    if ray or address is not None:
+        from .distributed import BATCH, evaluations
+
+        found, nodes = evaluations(
+            pairs, seeds, address=address, batch=batch or BATCH, num_cpus=workers
+        )
+        results = {pair: evaluation.summary() for pair, evaluation in found.items()}
+        if progress is not None:
+            progress(f"{len(pairs)} pairs × {episodes} episodes on {len(nodes)} Ray node(s)")
+    elif (processes := workers or min(len(os.sched_getaffinity(0)), len(pairs))) <= 1:
         for i, (env_id, spec) in enumerate(pairs):
             results[env_id, spec] = _job(env_id, spec, seeds)
             _report(progress, i + 1, len(pairs), results[env_id, spec])
     else:
         # Spawned, not forked: a worker forked after torch has started its threads
         # (loading a learned policy while planning does) can hang forever.
-        with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        with ProcessPoolExecutor(
+            processes, mp_context=multiprocessing.get_context("spawn")
+        ) as pool:
             futures = {pool.submit(_job, e, s, seeds): (e, s) for e, s in pairs}
             for i, future in enumerate(as_completed(futures)):
                 results[futures[future]] = future.result()

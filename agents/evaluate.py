@@ -164,6 +164,8 @@ def _episode(
     if frames is not None:
         frames.append(np.asarray(env.render()))
     policy.reset()
+    if hasattr(policy, "seed"):
+        policy.seed(seed)
     total, steps, first = 0.0, 0, math.nan
     slip, grip, quality = [], [], []
     done = False

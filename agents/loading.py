@@ -74,6 +74,9 @@ class RandomAgent(Agent):
         self.action_space = env.action_space
         self.action_space.seed(seed)
 
+    def seed(self, seed: int) -> None:
+        self.action_space.seed(seed)
+
     def _action(self, observation: Any, deterministic: bool) -> NDArray[np.float32]:
         return np.asarray(self.action_space.sample(), np.float32)
 
@@ -163,6 +166,11 @@ def _load_learned(path: Path) -> AgentSpec:
             continue
     if model is None:
         raise ValueError(f"{path} is not a stable-baselines3 {' or '.join(algos).upper()} model")
+    import torch
+
+    # One thread: a small MLP acting on one observation runs fastest there, and its
+    # actions then cannot depend on how many cores a process (or a Ray worker) has.
+    torch.set_num_threads(1)
     normalizer = None
     if (folder / "vecnormalize.pkl").is_file():
         with (folder / "vecnormalize.pkl").open("rb") as f:

@@ -30,7 +30,12 @@ from typing import Any
 
 import numpy as np
 import torch
-from stable_baselines3.common.callbacks import CallbackList, CheckpointCallback, EvalCallback
+from stable_baselines3.common.callbacks import (
+    BaseCallback,
+    CallbackList,
+    CheckpointCallback,
+    EvalCallback,
+)
 from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
 from stable_baselines3.common.logger import Logger, make_output_format
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
@@ -138,6 +143,7 @@ def train(
     n_envs: int | None = None,
     progress: Callable[[str], None] | None = None,
     progress_bar: bool = True,
+    after_eval: BaseCallback | None = None,
 ) -> TrainResult:
     """Train and evaluate one agent; see the module docstring for the run folder.
 
@@ -151,6 +157,8 @@ def train(
         progress: receives the status lines before training starts (default: stderr).
         progress_bar: show stable-baselines3's progress bar (tqdm and rich) while
             training; what training logs goes to ``progress.csv`` and ``tb/``.
+        after_eval: a callback run after each periodic evaluation (its ``parent``
+            is SB3's ``EvalCallback``; ``graspenv tune`` reports from it).
     """
     check_env_id(env_id)
     for name in LOGGING_PACKAGES:
@@ -220,6 +228,7 @@ def train(
         best_model_save_path=str(folder),
         deterministic=True,
         verbose=0,
+        callback_after_eval=after_eval,
     )
     callbacks = CallbackList(
         [

@@ -207,7 +207,16 @@ def _bench(args: argparse.Namespace) -> int:
         scenarios = args.scenario or (QUICK_SCENARIOS if args.quick else list(SCENARIOS))
         placements = args.placements or (1 if args.quick else 3)
         replays = args.replays or (2 if args.quick else 3)
-        results = run_bench(settings, scenarios, args.config, _say, placements, replays)
+        results = run_bench(
+            settings,
+            scenarios,
+            args.config,
+            _say,
+            placements,
+            replays,
+            ray=args.ray,
+            address=args.address,
+        )
     print(markdown_table(results))
     for path in write_outputs(results, Path(args.out)):
         print(f"wrote {path}")
@@ -277,6 +286,14 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
         "frame (fuzz.csv); exit 1 if any broke",
     )
     p.add_argument("--seed", type=int, default=0, help="--fuzz: the first episode's seed")
+    p.add_argument(
+        "--ray",
+        action="store_true",
+        help="speed against error: each (setting, scenario) a Ray task; rows name their node",
+    )
+    p.add_argument(
+        "--address", default=None, metavar="HOST:PORT", help="with --ray: an existing cluster"
+    )
     p.add_argument(
         "--workers", type=int, default=2, help="--grid, --noise, --fuzz: processes working at once"
     )
@@ -361,7 +378,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"graspenv {args.command}: error: {err}", file=sys.stderr)
         return 2
     except ModuleNotFoundError as err:
-        extras = {"matplotlib": "plots", "aiohttp": "serve", "pythonosc": "serve"}
+        extras = {"matplotlib": "plots", "aiohttp": "serve", "pythonosc": "serve", "ray": "ray"}
         hint = (
             f"pip install 'graspenv[{extras[err.name]}]'"
             if err.name in extras

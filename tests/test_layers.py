@@ -11,7 +11,8 @@ import pytest
 
 PACKAGE = Path(__file__).resolve().parents[1] / "graspenv"
 
-#: The tools: the benchmarks, the demo, replay, charts and the command line.
+#: The tools: the benchmarks, the demo, replay, charts, the live table, scale-out and
+#: the command line.
 TOOLS = (
     "graspenv.bench",
     "graspenv.demo",
@@ -19,6 +20,7 @@ TOOLS = (
     "graspenv.plots",
     "graspenv.cli",
     "graspenv.live",
+    "graspenv.cluster",
 )
 
 

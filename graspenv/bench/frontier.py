@@ -54,7 +54,9 @@ __all__ = [
     "SETTINGS",
     "measure",
     "measure_reference_row",
+    "play_task",
     "run_bench",
+    "summarise",
 ]
 
 #: The reference fidelity (graspenv/config.py, FIDELITY_PRESETS, says what it holds).
@@ -138,6 +140,30 @@ def measure(
         replays: timing runs of each (:func:`play`).
     """
     plays = [SCENARIOS[scenario](scene, offset, replays=replays) for offset in offsets]
+    return summarise(setting, scenario, scene, plays, references), plays
+
+
+def play_task(
+    scenario: str, scene: SceneConfig, offsets: Sequence[Offset], replays: int
+) -> tuple[list[Played], str]:
+    """One Ray task of ``graspenv bench --ray``: a scenario at one setting, every
+    placement, in one worker (so that its speed is one node's), and that node."""
+    from graspenv import cluster
+
+    plays = [SCENARIOS[scenario](scene, offset, replays=replays) for offset in offsets]
+    return plays, cluster.node()
+
+
+def summarise(
+    setting: str,
+    scenario: str,
+    scene: SceneConfig,
+    plays: Sequence[Played],
+    references: Sequence[Played] | None,
+    node: str = "",
+) -> Result:
+    """The row of one scenario at one setting from its plays (see :func:`measure`);
+    ``node`` labels where a Ray task played them."""
     frames = sum(p.frames for p in plays)
     stages: dict[str, float] = {}
     for played in plays:
@@ -163,23 +189,21 @@ def measure(
                 ]
             )
         )
-    return (
-        Result(
-            setting=setting,
-            scenario=scenario,
-            frames=frames,
-            fps=fps,
-            realtime=fps / camera,
-            bullet_share=stages["physics"] / total,
-            stage_fps={k: frames / max(v, 1e-12) for k, v in stages.items()},
-            mean_particles=float(np.mean([n for p in plays for n in p.particles])),
-            tracking_rms_mm=1000 * rms,
-            tracking_rms_px=rms / metres_per_pixel,
-            reference_drift_mm=drift,
-            errors=_mean_errors(plays),
-            placements=len(plays),
-        ),
-        plays,
+    return Result(
+        setting=setting,
+        scenario=scenario,
+        frames=frames,
+        fps=fps,
+        realtime=fps / camera,
+        bullet_share=stages["physics"] / total,
+        stage_fps={k: frames / max(v, 1e-12) for k, v in stages.items()},
+        mean_particles=float(np.mean([n for p in plays for n in p.particles])),
+        tracking_rms_mm=1000 * rms,
+        tracking_rms_px=rms / metres_per_pixel,
+        reference_drift_mm=drift,
+        errors=_mean_errors(plays),
+        placements=len(plays),
+        node=node,
     )
 
 
@@ -190,6 +214,8 @@ def run_bench(
     progress: Callable[[str], None] | None = None,
     placements: int = 1,
     replays: int = 1,
+    ray: bool = False,
+    address: str | None = None,
 ) -> list[Result]:
     """Every scenario at the reference fidelity first, then at every setting.
 
@@ -202,6 +228,11 @@ def run_bench(
             the same offsets, from the base scene's pixel size, for every setting.
         replays: timing runs of every scenario; speeds are per-frame minimums over
             them (:func:`play`); errors come from the first.
+        ray, address: play each (setting, scenario) as one Ray task
+            (:func:`play_task`) on a local instance or the cluster at ``address``.
+            The errors are the local run's; each row's speed is one task's on one
+            node, named in its ``node`` column (timings from different machines are
+            not comparable).
     """
     for name in settings:
         if name not in SETTINGS:
@@ -216,6 +247,8 @@ def run_bench(
     references: dict[str, list[Played]] = {}
     results = []
     order = ["reference"] + [s for s in settings if s != "reference"]
+    if ray or address is not None:
+        return _run_on_ray(order, settings, scenarios, base, offsets, replays, address)
     total = len(order) * len(scenarios)
     done = 0
     for setting in order:
@@ -232,6 +265,37 @@ def run_bench(
                 result = measure_reference_row(result)
             if setting in settings:
                 results.append(result)
+    return results
+
+
+def _run_on_ray(
+    order: Sequence[str],
+    settings: Sequence[str],
+    scenarios: Sequence[str],
+    base: SceneConfig,
+    offsets: Sequence[Offset],
+    replays: int,
+    address: str | None,
+) -> list[Result]:
+    from graspenv import cluster
+
+    cluster.connect(address)
+    jobs = [(setting, scenario) for setting in order for scenario in scenarios]
+    calls = [
+        (scenario, base.replace(**SETTINGS[setting]), offsets, replays)
+        for setting, scenario in jobs
+    ]
+    played = dict(zip(jobs, cluster.run_tasks(play_task, calls, "bench runs"), strict=True))
+    results = []
+    for setting, scenario in jobs:
+        plays, node = played[setting, scenario]
+        references = None if setting == "reference" else played["reference", scenario][0]
+        scene = base.replace(**SETTINGS[setting])
+        result = summarise(setting, scenario, scene, plays, references, node)
+        if setting == "reference":
+            result = measure_reference_row(result)
+        if setting in settings:
+            results.append(result)
     return results
 
 

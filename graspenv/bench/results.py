@@ -49,6 +49,8 @@ class Result:
     reference_drift_mm: float
     errors: dict[str, float]
     placements: int = 1
+    #: The Ray node that played the row (``graspenv bench --ray``), else "".
+    node: str = ""
 
     def row(self) -> dict[str, Any]:
         row: dict[str, Any] = {
@@ -66,6 +68,8 @@ class Result:
         }
         row.update({f"fps_{k}": round(v, 1) for k, v in self.stage_fps.items()})
         row.update({k: round(v, 4) for k, v in self.errors.items()})
+        if self.node:
+            row["node"] = self.node
         return row
 
 
@@ -133,7 +137,7 @@ def read_csv(path: Path) -> list[Result]:
         errors = {
             k: number(v)
             for k, v in row.items()
-            if k not in _ROW_FIELDS and not k.startswith("fps_") and v != ""
+            if k not in _ROW_FIELDS and k != "node" and not k.startswith("fps_") and v != ""
         }
         results.append(
             Result(
@@ -150,6 +154,7 @@ def read_csv(path: Path) -> list[Result]:
                 reference_drift_mm=number(row["reference_drift_mm"]),
                 errors=errors,
                 placements=int(row["placements"]),
+                node=row.get("node") or "",
             )
         )
     return results

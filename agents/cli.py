@@ -68,17 +68,22 @@ def _train(args: argparse.Namespace) -> int:
     return 0
 
 
-def add_train(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser(
-        "train",
-        help="train a stable-baselines3 PPO or SAC agent (run folder with logs and models)",
-    )
+def _add_baseline(p: argparse.ArgumentParser, seed_help: str) -> None:
+    """What naming a baseline takes: train and tune share it."""
     p.add_argument("--env", required=True, help="environment id, e.g. graspenv/TurnInPlace-v0")
     p.add_argument("--algo", required=True, choices=("ppo", "sac"))
     p.add_argument(
         "--config", default=None, help="hyperparameter file (default: agents/hyperparams/ALGO.toml)"
     )
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--seed", type=int, default=0, help=seed_help)
+
+
+def add_train(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "train",
+        help="train a stable-baselines3 PPO or SAC agent (run folder with logs and models)",
+    )
+    _add_baseline(p, "seeds the algorithm and the environments")
     p.add_argument("--out", default="runs/train", help="parent folder of the run folder")
     p.add_argument("--steps", type=int, default=None, help="override n_timesteps")
     p.add_argument("--n-envs", type=int, default=None, help="override n_envs (0: one per core)")
@@ -212,18 +217,13 @@ def add_tune(sub: argparse._SubParsersAction) -> None:
         "tune",
         help="a hyperparameter sweep of a baseline with Ray Tune (ASHA; best.toml for train)",
     )
-    p.add_argument("--env", required=True, help="environment id, e.g. graspenv/TurnInPlace-v0")
-    p.add_argument("--algo", required=True, choices=("ppo", "sac"))
+    _add_baseline(p, "every trial's training seed")
     p.add_argument(
         "--space",
         required=True,
         help="search space file (e.g. agents/hyperparams/tune/sac.toml)",
     )
     p.add_argument("--trials", type=int, default=8, help="configurations to draw")
-    p.add_argument("--seed", type=int, default=0, help="every trial's training seed")
-    p.add_argument(
-        "--config", default=None, help="hyperparameter file to start from (default: ALGO.toml)"
-    )
     p.add_argument("--out", default="runs/tune", help="folder for trials, sweep.csv, best.toml")
     p.add_argument("--address", default=None, metavar="HOST:PORT", help="an existing Ray cluster")
     p.set_defaults(run=_tune)

@@ -145,6 +145,18 @@ def test_a_foreign_origin_is_refused(live: Running) -> None:
     assert asyncio.run(attempt(f"http://127.0.0.1:{live.server.port}")) == 101
 
 
+def test_a_foreign_page_cannot_reset_the_table(live: Running) -> None:
+    import urllib.error
+    import urllib.request
+
+    request = urllib.request.Request(
+        live.url + "reset", data=b"", method="POST", headers={"Origin": "http://evil.example"}
+    )
+    with pytest.raises(urllib.error.HTTPError) as err:
+        urllib.request.urlopen(request, timeout=5)
+    assert err.value.code == 403
+
+
 def test_too_many_pages(live: Running) -> None:
     async def crowd() -> tuple[int, list[int]]:
         async with aiohttp.ClientSession() as session:

@@ -17,10 +17,11 @@ Safe defaults: the server binds to loopback (``--host 0.0.0.0`` exposes the tabl
 and anyone who can reach the port can touch it); a WebSocket upgrade whose
 ``Origin`` is not this server's host is refused, and so is such a ``POST /reset``
 (a page elsewhere cannot drive the table through a visitor's browser); at most
-:data:`MAX_CONNECTIONS` pages at once; messages of at most :data:`MAX_MESSAGE` bytes; at most :data:`MAX_RATE` messages a
-second from a page (more are dropped with an error) and :data:`MAX_DATAGRAM_RATE`
-datagrams a second on the TUIO port. Bad input is answered with an error where there
-is a channel and dropped; it never stops the server or touches another client.
+:data:`MAX_CONNECTIONS` pages at once; messages of at most :data:`MAX_MESSAGE`
+bytes; at most :data:`MAX_RATE` messages a second from a page (more are dropped
+with an error) and :data:`MAX_DATAGRAM_RATE` datagrams a second on the TUIO port.
+Bad input is answered with an error where there is a channel and dropped; it never
+stops the server or touches another client.
 """
 
 from __future__ import annotations

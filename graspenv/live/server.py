@@ -262,7 +262,10 @@ class LiveServer:
             await asyncio.sleep(1.0 / VIEW_HZ)
             if not self._clients:
                 continue
-            text = json.dumps(self.table.view())
+            view = self.table.view()
+            if not view:  # the table draws one from its next frame on
+                continue
+            text = json.dumps(view)
             for client in list(self._clients.values()):
                 # A page still busy with the last view skips this one: views are
                 # dropped, never queued.

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import base64
 import json
+import math
 import threading
 import time
 from collections import deque
@@ -44,6 +45,8 @@ __all__ = ["LiveState", "LiveTable"]
 
 #: Frames over which the frame rate and the frame time are averaged.
 _WINDOW = 60
+#: Seconds the table keeps drawing views after the last request for one.
+_VIEW_KEPT = 1.0
 
 
 @dataclass(frozen=True)
@@ -142,6 +145,7 @@ class LiveTable:
         self._success: bool | None = None
         self._state = self._read_state(0, 0)
         self._view: dict[str, Any] = {}
+        self._view_asked = -math.inf
 
     # -- control -----------------------------------------------------------------------
 
@@ -195,7 +199,13 @@ class LiveTable:
     def view(self) -> dict[str, Any]:
         """What the page draws: the state, the mask (PNG, base64), the contours and
         particles (pixels), the objects' outlines (pixels) and heights (metres), and
-        the goal's outline where the task has a pose goal."""
+        the goal's outline where the task has a pose goal.
+
+        The table's thread draws it only while someone asks (within
+        :data:`_VIEW_KEPT` seconds): with no page open, no frame pays for it. The
+        first call returns an empty dict; the next frames fill it.
+        """
+        self._view_asked = time.monotonic()
         with self._lock:
             return dict(self._view)
 
@@ -243,7 +253,8 @@ class LiveTable:
         end = time.perf_counter()
         self._times.append((end, end - start))
         state = self._read_state(report.n_contacts, len(touches), touched_at)
-        view = self._draw(state)
+        wanted = time.monotonic() - self._view_asked < _VIEW_KEPT
+        view = self._draw(state) if wanted else self._view
         with self._lock:
             self._state, self._view = state, view
 

@@ -206,6 +206,7 @@ def test_an_environment_task_is_served_with_its_goal_and_success() -> None:
 
     env = gym.make("graspenv/TurnInPlace-v0").unwrapped
     table = LiveTable(env, seed=3)
+    assert table.view() == {}  # asked for: drawn from the next frame on
     state = table.step_once()
     view = table.view()
     assert state.success is False and view["task"] == "TurnInPlace"

@@ -1,4 +1,4 @@
-"""Observation wrappers a hyperparameter file may name (``env_wrapper``, as in RL Zoo).
+"""Observation wrappers a hyperparameter file may name (the zoo's ``env_wrapper``).
 
 The state vector gives the object's pose and the goal in the table's frame: the
 goal's yaw is an absolute angle and the object's orientation a quaternion, so the
@@ -37,7 +37,8 @@ class RelativeGoal(gym.ObservationWrapper[NDArray[np.float32], Any, NDArray[np.f
         self.n_fingers = (
             self.layout["finger_positions"].stop - self.layout["finger_positions"].start
         ) // 2
-        self.goal_is_pose = self.layout["goal"].stop - self.layout["goal"].start == 3
+        # CatchBall's goal is a velocity and a hold, not a pose: nothing to add.
+        self.goal_is_pose = bool(getattr(unwrapped.task, "pose_goal", True))
         base = env.observation_space
         assert isinstance(base, spaces.Box)
         extra = 4 + 2 * self.n_fingers
@@ -63,5 +64,9 @@ class RelativeGoal(gym.ObservationWrapper[NDArray[np.float32], Any, NDArray[np.f
         return np.concatenate([observation, extra.astype(np.float32)]).astype(np.float32)
 
 
-#: Names a hyperparameter file's ``env_wrapper`` may use.
-WRAPPERS: dict[str, type[gym.Wrapper[Any, Any, Any, Any]]] = {"relative_goal": RelativeGoal}
+#: Names a run's ``env_wrapper`` may use: the import path a zoo hyperparameter file
+#: gives, and the short name of the runs trained before the zoo.
+WRAPPERS: dict[str, type[gym.Wrapper[Any, Any, Any, Any]]] = {
+    "graspenv_agents.wrappers.RelativeGoal": RelativeGoal,
+    "relative_goal": RelativeGoal,
+}

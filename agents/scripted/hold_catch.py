@@ -55,16 +55,22 @@ class FirmHold(ScriptedAgent):
 
 
 class CupAndCatch(ScriptedAgent):
-    """CatchBall: wedge the rolling ball between the two fingers and squeeze it still.
+    """CatchBall: stop the rolling ball in the cup of two fingers, then pinch it.
 
-    The fingers sit across the ball's path (one either side of the line it rolls
-    along), the grip centre on the y where the ball will cross the grip's x, their
-    gap ``wedge`` times the ball's diameter so that it cannot roll through. They
-    touch down ahead of the ball. Once the ball is near (``cushion`` metres) the
-    grip gives way in +x at a fraction ``give`` of the ball's speed, to take the
-    impact gently; once a finger feels the ball, the grip follows the ball's
-    velocity minus a braking term and keeps a light squeeze (``feel``–``firm``
-    newtons on the weaker finger).
+    1. **Cup.** The fingers sit across the ball's path (one either side of the line
+       it rolls along), the grip centre on the y where the ball will cross the
+       grip's x, their gap ``wedge`` times the ball's diameter so that it cannot roll
+       through. They touch down ahead of the ball. Once the ball is near
+       (``cushion`` metres) the grip gives way in +x at a fraction ``give`` of the
+       ball's speed, to take the impact gently; once a finger feels the ball, the
+       grip follows the ball's velocity minus a braking term (the impact is often
+       too brief for the force to show: being within 3 mm of a finger counts).
+    2. **Surround.** Once the ball is slower than ``settled`` m/s, the grip opens to
+       the ball's diameter plus ``clearance`` on each side and moves its centre onto
+       the ball's: the fingers pass either side of it without touching.
+    3. **Pinch.** The grip closes on the ball's equator, from opposite sides (two
+       contacts in the cup ahead of the ball are not force closure), and keeps a
+       light squeeze (``feel``–``firm`` newtons on the weaker finger).
     """
 
     name = "cup-and-catch"
@@ -74,9 +80,12 @@ class CupAndCatch(ScriptedAgent):
     cushion = 0.04
     give = 0.6
     brake = 0.5
+    settled = 0.05
+    clearance = 0.01
 
     def reset(self) -> None:
-        self._caught = False
+        self._phase = "cup"
+        self._touched = False
 
     def act(self, state: State) -> NDArray[np.float64]:
         ball = state.object_xy
@@ -88,21 +97,34 @@ class CupAndCatch(ScriptedAgent):
         opening = float(np.linalg.norm(span)) - 2 * FINGER_RADIUS
         angle = math.atan2(float(span[1]), float(span[0]))
         force = state.finger_force
-        vx = max(float(velocity[0]), 1e-3)
-        ahead = float(centre[0] - ball[0])  # distance left to the grip's x
-        if float(force.max()) > self.feel:
-            self._caught = True
         turn = float(np.clip(2.0 * math.remainder(math.pi / 2 - angle, math.pi), -1, 1))
+        if self._phase == "cup":
+            reach = float(np.linalg.norm(fingers - ball, axis=1).min()) - radius - FINGER_RADIUS
+            if float(force.max()) > self.feel or reach < 0.003:
+                self._touched = True
+            if self._touched and float(np.linalg.norm(velocity)) < self.settled:
+                self._phase = "surround"
         move = np.zeros(2)
-        if not self._caught:
+        if self._phase == "cup" and not self._touched:
+            vx = max(float(velocity[0]), 1e-3)
+            ahead = float(centre[0] - ball[0])  # distance left to the grip's x
             cross_y = float(ball[1] + velocity[1] / vx * max(ahead, 0.0))
             move[1] = np.clip(50.0 * (cross_y - centre[1]), -1.0, 1.0)
             if ahead < self.cushion + radius:
                 move[0] = min(self.give * vx / MAX_SPEED, 1.0)
-            gap = 2 * radius * self.wedge
-            open_rate = float(np.clip(300.0 * (gap - opening), -1, 1))
-        else:
+            open_rate = float(np.clip(300.0 * (2 * radius * self.wedge - opening), -1, 1))
+        elif self._phase == "cup":
             move = np.clip((1.0 - self.brake) * velocity / MAX_SPEED, -1.0, 1.0)
-            move[1] += float(np.clip(20.0 * (ball[1] - centre[1]), -0.5, 0.5))
-            open_rate = squeeze_rate(force, self.feel, self.firm, close=-0.3, nudge=-0.05)
+            open_rate = 0.0
+        else:
+            wide = 2 * (radius + self.clearance)
+            if self._phase == "surround":
+                open_rate = float(np.clip(300.0 * (wide - opening), -1, 1))
+                if opening > wide - 0.002:
+                    move = np.clip(60.0 * (ball - centre), -1.0, 1.0)
+                    if float(np.linalg.norm(ball - centre)) < 0.003:
+                        self._phase = "pinch"
+            if self._phase == "pinch":
+                move = np.clip(30.0 * (ball - centre), -0.2, 0.2)
+                open_rate = squeeze_rate(force, self.feel, self.firm, close=-0.5, nudge=-0.05)
         return np.array([move[0], move[1], turn, open_rate, 1.0])

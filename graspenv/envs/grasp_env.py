@@ -103,8 +103,9 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
     ``obs_mode="state"``: a float32 vector: object position (3, m), quaternion (4,
     x y z w), linear (3, m/s) and angular (3, rad/s) velocity, finger positions (2·n,
     m), touch flags (n), the goal (3: x, y in m and yaw in rad; CatchBall: the
-    desired planar velocity), per-finger normal force on the object (n, in units of
-    10 N), per-finger particle contact count (n, in units of 10) and slip (1, m/s).
+    ball's planar velocity, m/s, and whether it is held, desired (0, 0, 1)),
+    per-finger normal force on the object (n, in units of 10 N), per-finger particle
+    contact count (n, in units of 10) and slip (1, m/s).
     ``"mask"``: a Dict with ``mask``, the contact mask downsampled to 72 × 96 × 1
     uint8, and ``state``, the vector above. ``"goal"``: Gymnasium-Robotics' Dict
     (``observation`` without the goal, ``achieved_goal``, ``desired_goal``) with a
@@ -142,7 +143,9 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
 
     ## Version History
 
-    - v0: first release.
+    - v0: first release. 2026-12-03: CatchBall succeeds on a catch (the ball held
+      still in force closure for `hold_steps`), not on the ball stopping; its goal
+      vector gained the hold.
     """
 
     metadata: dict[str, Any] = {  # noqa: RUF012  (Gymnasium's own convention)

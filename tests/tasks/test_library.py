@@ -58,7 +58,7 @@ def test_each_task_has_only_its_own_settings() -> None:
         own = {f.name for f in dataclasses.fields(task.config_type)} - shared
         assert own == {
             "SqueezeHold": {"hold_steps", "settle_steps", "force"},
-            "CatchBall": {"ball_speed"},
+            "CatchBall": {"ball_speed", "hold_steps"},
         }.get(name, set()), name
 
 
@@ -80,9 +80,11 @@ def test_bad_hold_settings_name_the_key(config: dict[str, object], message: str)
         SqueezeHoldConfig(**config)  # type: ignore[arg-type]
 
 
-def test_bad_ball_speed_names_the_key() -> None:
+def test_bad_ball_settings_name_the_key() -> None:
     with pytest.raises(ValueError, match=r"task\.ball_speed"):
         CatchBallConfig(ball_speed=(0.6, 0.4))
+    with pytest.raises(ValueError, match=r"task\.hold_steps"):
+        CatchBallConfig(hold_steps=0)
 
 
 @pytest.mark.parametrize("name", list(TASKS))
@@ -161,15 +163,40 @@ def test_success_is_a_pure_function_of_its_arguments() -> None:
     assert not task.is_success(state_at(task.config.settle_steps), goal, episode)
 
 
-def test_catch_ball_succeeds_only_stopped_on_the_table() -> None:
+def caught(x: float = 0.1, vx: float = 0.0, held: bool = True) -> EpisodeState:
+    state = state_at(5, x=x, vx=vx)
+    state.force_closure = held
+    return state
+
+
+def test_catch_ball_succeeds_only_held_still_on_the_table_long_enough() -> None:
     task = CatchBall()
-    goal = np.zeros(3)
-    record = TaskEpisode()
-    assert task.is_success(state_at(5, x=0.1, vx=0.01), goal, record)
-    assert not task.is_success(state_at(5, x=0.1, vx=0.1), goal, record)
-    assert not task.is_success(state_at(5, x=0.4, vx=0.0), goal, record)
+    goal = task.draw_goal(np.random.default_rng(0), task.draw_object(np.random.default_rng(0)))
+    record = task.initialize_episode(
+        np.random.default_rng(0), task.draw_object(np.random.default_rng(0)), goal
+    ).episode
+    hold = task.config.hold_steps
+    # Held still: success on the hold_steps-th step in a row, not before.
+    for _ in range(hold):
+        assert not task.is_success(caught(), goal, record)
+        record = task.after_step(caught(), record)
+    assert task.is_success(caught(), goal, record)
+    # A ball that stops without being held, that is held but rolling, or that has
+    # left the table, resets the count.
+    for state in (caught(held=False), caught(vx=0.1), caught(x=0.4)):
+        assert task.after_step(state, record).caught_steps == 0  # type: ignore[attr-defined]
     assert task.is_done(state_at(5, x=0.4, vx=0.3), False, record)
     assert not CatchBall.pose_goal and TurnInPlace.pose_goal
+
+
+def test_catch_ball_goal_terms_pay_for_a_held_still_ball() -> None:
+    task = CatchBall()
+    goal = np.array([0.0, 0.0, 1.0])
+    achieved = np.array([task.achieved_goal(s) for s in (caught(), caught(held=False))])
+    assert achieved[:, 2].tolist() == [1.0, 0.0]
+    assert task.goal_success(achieved, goal).tolist() == [True, False]
+    reward = task.goal_reward(achieved, goal)
+    assert reward[0] > reward[1]
 
 
 def test_the_default_hooks_keep_the_record() -> None:

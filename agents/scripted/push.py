@@ -114,11 +114,17 @@ class RubFromTop(ScriptedAgent):
     makes the card swing anticlockwise (to the left for clockwise), so while the yaw
     error is large the contact point is offset ``turn_offset`` sideways. When the
     finger is more than ``replace`` from its wanted contact point (it slipped, or the
-    wanted point changed) it lifts and is placed again.
+    wanted point changed) it lifts and is placed again. A card dragged that way
+    turns only a few degrees per centimetre (the fingertip's contact patch resists
+    the turn), so when it reaches the goal with its yaw still off by more than
+    ``detour_band``, the finger drags it on past the goal by ``detour`` and back,
+    turning it on both legs.
     """
 
     name = "rub-from-top"
-    turn_offset = 0.02
+    turn_offset = 0.03
+    detour = 0.04
+    detour_band = math.radians(8.0)
     yaw_band = math.radians(4.0)
     speed = 0.5
     min_speed = 0.1
@@ -129,14 +135,25 @@ class RubFromTop(ScriptedAgent):
     def reset(self) -> None:
         self.touching = False
         self.heading = np.array([1.0, 0.0])
+        self.waypoint: NDArray[np.float64] | None = None
 
     def act(self, state: State) -> NDArray[np.float64]:
         card = state.object_xy
         goal = state.goal[:2]
         finger = state.fingers[0]
+        yaw_error = math.remainder(float(state.goal[2]) - state.object_yaw, 2 * math.pi)
+        if self.waypoint is not None and float(np.linalg.norm(self.waypoint - card)) < 0.005:
+            self.waypoint = None
+        if (
+            self.waypoint is None
+            and abs(yaw_error) > self.detour_band
+            and float(np.linalg.norm(goal - card)) < 0.004
+        ):
+            self.waypoint = goal + self.detour * self.heading
+        if self.waypoint is not None:
+            goal = self.waypoint
         to_goal = goal - card
         distance = float(np.linalg.norm(to_goal))
-        yaw_error = math.remainder(float(state.goal[2]) - state.object_yaw, 2 * math.pi)
         if distance > 0.004:
             self.heading = _unit(to_goal)
         offset = np.zeros(2)

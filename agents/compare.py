@@ -5,7 +5,7 @@ Markdown table), ``compare.csv`` (the same numbers) and ``compare.png`` (bar cha
 of success, with 95 % intervals, and of grasp quality, strategy by task). An agent
 runs on the environments it applies to: a scripted strategy or a learned policy on
 the one it was written or trained for (unless environments are named explicitly
-with ``--env``), ``random`` on every one. Jobs run in parallel, one per core.
+with ``--env``), ``random`` and ``still`` on every one. Jobs run in parallel, one per core.
 """
 
 from __future__ import annotations
@@ -36,9 +36,10 @@ POLICIES = Path(__file__).parent / "policies"
 
 
 def default_agents() -> list[str]:
-    """Every scripted strategy, every shipped policy, and random."""
+    """Every scripted strategy, every shipped policy, and the two floors: random
+    actions and a still hand."""
     shipped = sorted(str(p) for p in POLICIES.glob("*") if (p / "run.json").is_file())
-    return [f"scripted:{name}" for name in STRATEGIES] + shipped + ["random"]
+    return [f"scripted:{name}" for name in STRATEGIES] + shipped + ["random", "still"]
 
 
 @dataclass(frozen=True)

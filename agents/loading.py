@@ -5,8 +5,9 @@ import another to build what it plays. An agent is named by a spec:
 
 - ``scripted:NAME``: a strategy from :data:`graspenv_agents.scripted.STRATEGIES`;
 - ``random``: uniform random actions (seeded);
+- ``still``: a hand lying still on the table (no motion, every finger down);
 - a path: a stable-baselines3 model (``.zip``) or a ``graspenv train`` run folder
-  (its ``best_model.zip``, else ``model.zip``, else a trimmed ``policy.pt``). The
+  (its final policy ``policy.pt``, else ``model.zip``, else ``best_model.zip``). The
   run's ``run.json`` supplies the algorithm and the environment arguments and
   wrapper it was trained with, and its ``vecnormalize.pkl`` the observation
   normalisation.
@@ -81,6 +82,23 @@ class RandomAgent(Agent):
         return np.asarray(self.action_space.sample(), np.float32)
 
 
+class StillAgent(Agent):
+    """A hand lying still on the table where the task put it: no motion, every
+    finger down. The floor of a task that an object could pass by itself."""
+
+    name = "still"
+
+    def __init__(self, env: gym.Env[Any, Any]) -> None:
+        size = int(np.prod(env.action_space.shape or ()))
+        self._still = np.zeros(size, np.float32)
+        # The touch flags: grip (vx, vy, turn, open, touch); fingers (vx, vy, touch) each.
+        mode = env.unwrapped.action_mode  # type: ignore[attr-defined]
+        self._still[4 if mode == "grip" else slice(2, None, 3)] = 1.0
+
+    def _action(self, observation: Any, deterministic: bool) -> NDArray[np.float32]:
+        return self._still.copy()
+
+
 class LearnedAgent(Agent):
     """A stable-baselines3 model with the observation normalisation it trained with.
 
@@ -121,6 +139,8 @@ def load_agent(spec: str, seed: int = 0) -> AgentSpec:
     """
     if spec == "random":
         return AgentSpec("random", lambda env: RandomAgent(env, seed), kind="random")
+    if spec == "still":
+        return AgentSpec("still", StillAgent, kind="still")
     if spec.startswith("scripted:"):
         name = spec.removeprefix("scripted:")
         if name not in STRATEGIES:
@@ -136,12 +156,13 @@ def load_agent(spec: str, seed: int = 0) -> AgentSpec:
 
 def _load_learned(path: Path) -> AgentSpec:
     if path.is_dir():
-        for candidate in ("best_model.zip", "model.zip", "policy.pt"):
+        # The final policy first (what agents/policies/ ships), then the models.
+        for candidate in ("policy.pt", "model.zip", "best_model.zip"):
             if (path / candidate).is_file():
                 path = path / candidate
                 break
         else:
-            raise FileNotFoundError(f"no best_model.zip, model.zip or policy.pt in {path}")
+            raise FileNotFoundError(f"no policy.pt, model.zip or best_model.zip in {path}")
     if not path.is_file():
         raise FileNotFoundError(
             f"no model file {path} (agents are scripted:NAME, random, or a model path)"

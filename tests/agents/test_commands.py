@@ -77,17 +77,18 @@ def test_compare_default_plan_runs_each_strategy_on_its_own_task() -> None:
     assert scripted == {(env, f"scripted:{name}") for name, (env, *_) in STRATEGIES.items()}
     import graspenv
 
-    assert {env for env, spec in pairs if spec == "random"} == set(graspenv.ENV_IDS)
+    for floor in ("random", "still"):
+        assert {env for env, spec in pairs if spec == floor} == set(graspenv.ENV_IDS)
 
 
 BAD_HYPERPARAMS = {
-    "malformed": "[defaults\nn_steps = 64",
-    "unknown key": "[defaults]\nn_stepz = 64",
-    "wrong type": '[defaults]\nn_envs = "two"',
-    "not a table": "n_steps = 64",
-    "bad activation": '[defaults]\npolicy_kwargs = { activation_fn = "sigmoidish" }',
-    "demos for ppo": '[defaults]\ndemonstrations = "scripted:pinch-and-turn"\ndemo_episodes = 5',
-    "demos not scripted": '[defaults]\ndemonstrations = "random"\ndemo_episodes = 5',
+    "malformed": "graspenv/TurnInPlace-v0: [n_steps: 64",
+    "not a mapping": "- n_steps",
+    "no entry": "graspenv/SqueezeSlide-v0:\n  n_timesteps: 100",
+    "entry not a mapping": "graspenv/TurnInPlace-v0: 5",
+    "unknown key": "graspenv/TurnInPlace-v0:\n  n_timesteps: 100\n  n_stepz: 64",
+    "no n_timesteps": "graspenv/TurnInPlace-v0:\n  n_steps: 64",
+    "bad n_timesteps": "graspenv/TurnInPlace-v0:\n  n_timesteps: many",
 }
 
 
@@ -95,7 +96,7 @@ BAD_HYPERPARAMS = {
     "argv",
     [
         ["train", "--env", "graspenv/Nope-v0", "--algo", "ppo", "--steps", "10"],
-        ["train", "--env", TURN, "--algo", "ppo", "--config", "/nonexistent/ppo.toml"],
+        ["train", "--env", TURN, "--algo", "ppo", "--config", "/nonexistent/ppo.yml"],
         ["eval", "--env", "graspenv/Nope-v0", "--agent", "random"],
         ["eval", "--agent", "scripted:juggle"],
         ["eval", "--env", TURN, "--agent", "/nonexistent/model.zip"],
@@ -116,13 +117,13 @@ def test_bad_hyperparameter_files_end_in_one_line(
     case: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     pytest.importorskip("stable_baselines3")  # keys are checked against PPO's arguments
-    path = tmp_path / "ppo.toml"
+    path = tmp_path / "ppo.yml"
     path.write_text(BAD_HYPERPARAMS[case])
     argv = ["train", "--env", TURN, "--algo", "ppo", "--config", str(path), "--out", str(tmp_path)]
     assert main(argv) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("graspenv train: error: ") and str(path) in err and "\n" not in err
-    assert not (tmp_path / "TurnInPlace-ppo-s0").exists()
+    assert not (tmp_path / "ppo").exists()
 
 
 def test_a_model_file_that_is_not_a_model(

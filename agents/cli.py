@@ -61,8 +61,9 @@ def _train(args: argparse.Namespace) -> int:
         config=args.config,
         out=args.out,
         steps=args.steps,
-        n_envs=args.n_envs,
         progress=_say,
+        eval_freq=args.eval_freq,
+        eval_episodes=args.eval_episodes,
     )
     print(result.text())
     return 0
@@ -73,7 +74,7 @@ def _add_baseline(p: argparse.ArgumentParser, seed_help: str) -> None:
     p.add_argument("--env", required=True, help="environment id, e.g. graspenv/TurnInPlace-v0")
     p.add_argument("--algo", required=True, choices=("ppo", "sac"))
     p.add_argument(
-        "--config", default=None, help="hyperparameter file (default: agents/hyperparams/ALGO.toml)"
+        "--config", default=None, help="hyperparameter file (default: agents/hyperparams/ALGO.yml)"
     )
     p.add_argument("--seed", type=int, default=0, help=seed_help)
 
@@ -81,12 +82,15 @@ def _add_baseline(p: argparse.ArgumentParser, seed_help: str) -> None:
 def add_train(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "train",
-        help="train a stable-baselines3 PPO or SAC agent (run folder with logs and models)",
+        help="train a PPO or SAC baseline with rl-baselines3-zoo (prints the zoo command)",
     )
-    _add_baseline(p, "seeds the algorithm and the environments")
-    p.add_argument("--out", default="runs/train", help="parent folder of the run folder")
+    _add_baseline(p, "seeds the zoo's run")
+    p.add_argument("--out", default="runs/train", help="the zoo's log folder")
     p.add_argument("--steps", type=int, default=None, help="override n_timesteps")
-    p.add_argument("--n-envs", type=int, default=None, help="override n_envs (0: one per core)")
+    p.add_argument(
+        "--eval-freq", type=int, default=5_000, help="steps between evaluations (-1: none)"
+    )
+    p.add_argument("--eval-episodes", type=int, default=10, help="episodes per evaluation")
     p.set_defaults(run=_train)
 
 
@@ -215,7 +219,7 @@ def _tune(args: argparse.Namespace) -> int:
 def add_tune(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "tune",
-        help="a hyperparameter sweep of a baseline with Ray Tune (ASHA; best.toml for train)",
+        help="a hyperparameter sweep of a baseline with Ray Tune (ASHA; best.yml for train)",
     )
     _add_baseline(p, "every trial's training seed")
     p.add_argument(
@@ -224,6 +228,6 @@ def add_tune(sub: argparse._SubParsersAction) -> None:
         help="search space file (e.g. agents/hyperparams/tune/sac.toml)",
     )
     p.add_argument("--trials", type=int, default=8, help="configurations to draw")
-    p.add_argument("--out", default="runs/tune", help="folder for trials, sweep.csv, best.toml")
+    p.add_argument("--out", default="runs/tune", help="folder for trials, sweep.csv, best.yml")
     p.add_argument("--address", default=None, metavar="HOST:PORT", help="an existing Ray cluster")
     p.set_defaults(run=_tune)

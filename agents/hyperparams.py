@@ -1,59 +1,56 @@
-"""Per-environment hyperparameter files, in RL Zoo's style.
+"""Per-environment hyperparameter files: rl-baselines3-zoo's own YAML format.
 
-One TOML file per algorithm (``agents/hyperparams/ppo.toml``, ``sac.toml``). A
-``[defaults]`` table applies to every environment; a table named by the environment
-id (``["graspenv/TurnInPlace-v0"]``) overrides it key by key. Keys are the
-algorithm's own constructor arguments plus these run settings:
+One file per algorithm (``agents/hyperparams/ppo.yml``, ``sac.yml``), one entry per
+environment id, read by the zoo (``python -m rl_zoo3.train --conf-file FILE``) and
+so by ``graspenv train``, which runs the zoo. Keys are the zoo's: the algorithm's
+constructor arguments (``policy_kwargs`` as the zoo's Python string, e.g.
+``"dict(net_arch=[256, 256])"``) and its own run keys (:data:`ZOO_KEYS`:
+``n_timesteps``, ``policy``, ``n_envs``, ``normalize``, ``env_wrapper``,
+``callback`` and the rest, as the zoo documents them). The graspenv-specific pieces
+are named by their import path: ``graspenv_agents.wrappers.RelativeGoal`` and
+``graspenv_agents.zoo.ScriptedDemonstrations``.
 
-- ``n_timesteps``: environment steps to train for;
-- ``policy``: ``MlpPolicy`` (state observations) or ``MultiInputPolicy`` (dicts);
-- ``n_envs``: environments stepped in parallel (``0``: one per available core);
-- ``normalize``: wrap the environments in ``VecNormalize`` (observations and rewards);
-- ``env_kwargs``: keyword arguments for ``gym.make``;
-- ``env_wrapper``: a name from :data:`graspenv_agents.wrappers.WRAPPERS`;
-- ``eval_freq``, ``eval_episodes``: periodic deterministic evaluation (steps, episodes);
-- ``checkpoint_freq``: steps between saved checkpoints;
-- ``torch_threads``: threads torch may use (1 keeps the cores for the environments);
-- ``demonstrations``, ``demo_episodes``: off-policy algorithms only: before training,
-  fill the replay buffer with this many episodes of a scripted strategy
-  (``"scripted:NAME"``), seeded apart from training and evaluation.
-
-``policy_kwargs.activation_fn`` is a name (``tanh``, ``relu``, ``elu``);
-``replay_buffer_class`` may be ``"HerReplayBuffer"`` (hindsight relabelling, with
-``env_kwargs.obs_mode = "goal"`` and ``policy = "MultiInputPolicy"``), its options in
-``replay_buffer_kwargs``.
+:func:`load_hyperparams` reads one entry and checks it before the zoo does, so that
+a typo stops with the file, the entry and the key named rather than deep in a
+training run.
 """
 
 from __future__ import annotations
 
 import inspect
-import tomllib
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ALGOS", "RUN_KEYS", "default_file", "load_hyperparams"]
+__all__ = [
+    "ALGOS",
+    "ZOO_KEYS",
+    "algorithm",
+    "default_file",
+    "load_hyperparams",
+    "write_hyperparams",
+]
 
 ALGOS = ("ppo", "sac")
-RUN_KEYS = {
-    "n_timesteps": 100_000,
-    "policy": "MlpPolicy",
-    "n_envs": 1,
-    "normalize": False,
-    "env_kwargs": {},
-    "env_wrapper": "",
-    "eval_freq": 10_000,
-    "eval_episodes": 10,
-    "checkpoint_freq": 50_000,
-    "torch_threads": 1,
-    "demonstrations": "",
-    "demo_episodes": 0,
-}
-ACTIVATIONS = ("tanh", "relu", "elu", "leaky_relu")
-REPLAY_BUFFERS = ("HerReplayBuffer",)
+#: The zoo's own keys beside the algorithm's arguments (rl_zoo3.exp_manager).
+ZOO_KEYS = frozenset(
+    {
+        "n_timesteps",
+        "policy",
+        "n_envs",
+        "normalize",
+        "env_wrapper",
+        "vec_env_wrapper",
+        "env_kwargs",
+        "callback",
+        "frame_stack",
+        "monitor_kwargs",
+        "normalize_kwargs",
+    }
+)
 
 
 def default_file(algo: str) -> Path:
-    return Path(__file__).parent / "hyperparams" / f"{algo}.toml"
+    return Path(__file__).parent / "hyperparams" / f"{algo}.yml"
 
 
 def algorithm(algo: str) -> Any:
@@ -67,79 +64,57 @@ def algorithm(algo: str) -> Any:
     return {"ppo": PPO, "sac": SAC}[algo]
 
 
-def load_hyperparams(env_id: str, algo: str, path: str | Path | None = None) -> dict[str, Any]:
-    """The settings for one environment and algorithm: run settings (every key of
-    :data:`RUN_KEYS`) and algorithm arguments, as plain TOML values.
+def _read(path: Path) -> dict[str, Any]:
+    import yaml  # the training extra (rl-zoo3 needs it); only when a file is read
 
-    Raises:
-        FileNotFoundError: no such file.
-        ValueError: malformed TOML, an unknown key, or a wrong type, naming the
-            file and table.
-    """
-    cls = algorithm(algo)
-    path = Path(path) if path is not None else default_file(algo)
     if not path.is_file():
         raise FileNotFoundError(f"no hyperparameter file {path}")
     try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"{path}: malformed TOML: {err}") from None
-    for name, table in data.items():
-        if not isinstance(table, dict):
-            raise ValueError(f"{path}: top-level key {name!r} must be a table")
-    settings: dict[str, Any] = dict(RUN_KEYS)
+        data = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as err:
+        # One line: what went wrong, and where (PyYAML's own message spans several).
+        mark = getattr(err, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(err, "problem", None) or type(err).__name__
+        raise ValueError(f"{path}: malformed YAML{where}: {problem}") from None
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: expected a mapping of environment ids to entries")
+    return data
+
+
+def load_hyperparams(env_id: str, algo: str, path: str | Path | None = None) -> dict[str, Any]:
+    """The entry for ``env_id`` in ``algo``'s file (default
+    ``agents/hyperparams/<algo>.yml``), as the zoo will read it.
+
+    Raises:
+        FileNotFoundError: no such file.
+        ValueError: malformed YAML, no entry for ``env_id``, an unknown key, or a
+            bad ``n_timesteps``, naming the file and the entry.
+    """
+    cls = algorithm(algo)
+    path = Path(path) if path is not None else default_file(algo)
+    data = _read(path)
+    if env_id not in data:
+        raise ValueError(f"{path}: no entry for {env_id} (entries: {sorted(data)})")
+    entry = data[env_id]
+    if not isinstance(entry, dict):
+        raise ValueError(f"{path}: {env_id} must be a mapping of hyperparameters")
     accepted = set(inspect.signature(cls.__init__).parameters) - {"self", "env", "policy"}
-    for section in ("defaults", env_id):
-        table = data.get(section, {})
-        for key, value in table.items():
-            if key not in RUN_KEYS and key not in accepted:
-                raise ValueError(f"{path}: [{section}] unknown key {key!r} for {algo}")
-            default = RUN_KEYS.get(key)
-            if default is not None and not _same_kind(default, value):
-                raise ValueError(
-                    f"{path}: [{section}] {key} must be {type(default).__name__}, got {value!r}"
-                )
-            settings[key] = value
-    if settings["demo_episodes"] and not settings["demonstrations"].startswith("scripted:"):
-        raise ValueError(f"{path}: demonstrations must name a scripted:STRATEGY")
-    if settings["demo_episodes"] and algo == "ppo":
-        raise ValueError(f"{path}: demonstrations need an off-policy algorithm (sac)")
-    buffer = settings.get("replay_buffer_class")
-    if buffer is not None and buffer not in REPLAY_BUFFERS:
-        raise ValueError(
-            f"{path}: replay_buffer_class must be one of {list(REPLAY_BUFFERS)}, got {buffer!r}"
-        )
-    activation = settings.get("policy_kwargs", {}).get("activation_fn")
-    if activation is not None and activation not in ACTIVATIONS:
-        raise ValueError(
-            f"{path}: policy_kwargs.activation_fn must be one of {list(ACTIVATIONS)}, "
-            f"got {activation!r}"
-        )
-    return settings
+    for key in entry:
+        if key not in ZOO_KEYS and key not in accepted:
+            raise ValueError(f"{path}: {env_id}: unknown key {key!r} for {algo}")
+    steps = entry.get("n_timesteps")
+    if not isinstance(steps, int | float) or isinstance(steps, bool) or steps < 1:
+        raise ValueError(f"{path}: {env_id}: n_timesteps must be a positive number, got {steps!r}")
+    return dict(entry)
 
 
-def _same_kind(default: Any, value: Any) -> bool:
-    if isinstance(default, bool) or isinstance(value, bool):
-        return isinstance(value, bool) and isinstance(default, bool)
-    if isinstance(default, int):
-        return isinstance(value, int)
-    return isinstance(value, type(default))
+def write_hyperparams(path: Path, entries: dict[str, dict[str, Any]], comment: str = "") -> Path:
+    """Write a file of ``entries`` (environment id -> hyperparameters) with a
+    comment at its top, in the format :func:`load_hyperparams` and the zoo read."""
+    import yaml
 
-
-def algorithm_kwargs(settings: dict[str, Any]) -> dict[str, Any]:
-    """The settings the algorithm's constructor takes (activation names resolved)."""
-    kwargs = {k: v for k, v in settings.items() if k not in RUN_KEYS}
-    policy_kwargs = dict(kwargs.get("policy_kwargs", {}))
-    if "activation_fn" in policy_kwargs:
-        import torch  # here for the same reason as in `algorithm`
-
-        names = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU, "elu": torch.nn.ELU}
-        names["leaky_relu"] = torch.nn.LeakyReLU
-        policy_kwargs["activation_fn"] = names[policy_kwargs["activation_fn"]]
-    if policy_kwargs:
-        kwargs["policy_kwargs"] = policy_kwargs
-    if kwargs.get("replay_buffer_class") == "HerReplayBuffer":
-        from stable_baselines3 import HerReplayBuffer  # as in `algorithm`
-
-        kwargs["replay_buffer_class"] = HerReplayBuffer
-    return kwargs
+    header = "".join(f"# {line}\n" for line in comment.splitlines())
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(header + yaml.safe_dump(entries, sort_keys=False))
+    return path

@@ -1,55 +1,59 @@
-"""``graspenv train``: stable-baselines3 PPO or SAC on a graspenv environment.
+"""``graspenv train``: a learned baseline, trained by rl-baselines3-zoo.
 
-A run folder records everything needed to reproduce and to use the result:
+``graspenv train --env ENV --algo ALGO --seed S`` runs the zoo's own training,
+in this process, with the same arguments a user would give it::
 
-- ``run.json``: environment, algorithm, seed, the resolved hyperparameters, the
-  command, package versions, the git commit, wall time and steps;
-- ``model.zip`` (final) and ``best_model.zip`` (best periodic evaluation), with
-  ``vecnormalize.pkl`` when observations are normalised;
-- ``checkpoints/``, ``progress.csv`` (every logged value), ``tb/`` (the same values
-  as TensorBoard event files, from stable-baselines3's logger);
-- ``evaluations.csv`` and ``learning_curve.png``: periodic deterministic
-  evaluation (success rate and return against training steps).
+    python -m rl_zoo3.train --algo ALGO --env ENV --gym-packages graspenv \
+        --conf-file agents/hyperparams/ALGO.yml --seed S --num-threads 1 ...
+
+(it prints the full command first). The zoo builds the environments, the model,
+the callbacks (stable-baselines3's evaluation, checkpoints and progress bar, and
+any the file names, such as :class:`graspenv_agents.zoo.ScriptedDemonstrations`),
+the TensorBoard log, and saves the model; this front adds only what a shipped
+baseline needs beside it. The run folder is the zoo's,
+``OUT/<algo>/graspenv-<Task>-v0_<N>/``:
+
+- from the zoo: ``graspenv-<Task>-v0.zip`` (the final model), ``best_model.zip``,
+  ``evaluations.npz``, ``rl_model_*.zip`` checkpoints, ``0.monitor.csv``, and
+  ``graspenv-<Task>-v0/`` (``config.yml``, ``args.yml``, ``vecnormalize.pkl``);
+- from here: ``run.json`` (environment, algorithm, seed, the entry's
+  hyperparameters, the zoo command, package versions, the git commit, wall time),
+  ``policy.pt`` (the final policy alone, what ``agents/policies/`` ships),
+  ``vecnormalize.pkl`` beside it when observations are normalised, and
+  ``evaluations.csv`` with ``learning_curve.png`` (success against steps).
+
+TensorBoard logs go to ``OUT/tb/graspenv-<Task>-v0/<ALGO>_<N>/`` (``tensorboard
+--logdir OUT/tb``); ``run.json`` names the run's.
 """
 
 from __future__ import annotations
 
-import functools
 import importlib.util
 import json
-import os
 import platform
+import shlex
+import shutil
 import subprocess
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-import torch
-from stable_baselines3.common.callbacks import (
-    BaseCallback,
-    CallbackList,
-    CheckpointCallback,
-    EvalCallback,
-)
-from stable_baselines3.common.env_util import make_vec_env as sb3_make_vec_env
-from stable_baselines3.common.logger import Logger, make_output_format
-from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
 
 from graspenv.plots import line_chart
 
-from .hyperparams import algorithm, algorithm_kwargs, load_hyperparams
-from .loading import check_env_id, load_agent, make_env
+from .hyperparams import algorithm, default_file, load_hyperparams
+from .loading import check_env_id
 
-__all__ = ["TrainResult", "make_vec_env", "train"]
+__all__ = ["TrainResult", "train", "zoo_arguments"]
 
-#: What stable-baselines3 needs for the TensorBoard logs and the progress bar (the
-#: training extra), which it imports only once asked for them.
-LOGGING_PACKAGES = ("tensorboard", "tqdm", "rich")
+#: What training needs beyond stable-baselines3 (the training extra): the zoo, and
+#: what SB3 imports only once asked for TensorBoard logs and the progress bar.
+TRAINING_PACKAGES = ("rl_zoo3", "tensorboard", "tqdm", "rich")
 
 PACKAGES = (
     "graspenv",
@@ -58,29 +62,9 @@ PACKAGES = (
     "numpy",
     "opencv-python-headless",
     "stable-baselines3",
+    "rl_zoo3",
     "torch",
 )
-
-
-def make_vec_env(
-    env_id: str,
-    settings: dict[str, Any],
-    n_envs: int,
-    seed: int,
-    monitor_dir: Path | None = None,
-) -> Any:
-    """``n_envs`` monitored environments (subprocesses when more than one)."""
-    factory = functools.partial(
-        make_env, env_id, dict(settings["env_kwargs"]), settings["env_wrapper"]
-    )
-    return sb3_make_vec_env(
-        lambda: factory(),
-        n_envs=n_envs,
-        seed=seed,
-        monitor_dir=None if monitor_dir is None else str(monitor_dir),
-        monitor_kwargs={"info_keywords": ("is_success",)},
-        vec_env_cls=SubprocVecEnv if n_envs > 1 else DummyVecEnv,
-    )
 
 
 @dataclass(frozen=True)
@@ -121,16 +105,55 @@ def git_commit(where: Path) -> str | None:
     return out.stdout.strip() + ("+uncommitted" if dirty.stdout.strip() else "")
 
 
-def run_folder(root: Path, env_id: str, algo: str, seed: int) -> Path:
-    """A new folder ``root/<Task>-<algo>-s<seed>`` (``-2``, ``-3``… if taken)."""
-    base = f"{env_id.split('/')[-1].removesuffix('-v0')}-{algo}-s{seed}"
-    folder = root / base
-    k = 2
-    while folder.exists():
-        folder = root / f"{base}-{k}"
-        k += 1
-    folder.mkdir(parents=True)
-    return folder
+def zoo_arguments(
+    env_id: str,
+    algo: str,
+    seed: int,
+    config: Path,
+    out: Path,
+    steps: int | None = None,
+    eval_freq: int = 5_000,
+    eval_episodes: int = 10,
+    save_freq: int = 25_000,
+    progress_bar: bool = True,
+    n_envs: int = 1,
+) -> list[str]:
+    """The arguments of ``python -m rl_zoo3.train`` for one run: the file's entry,
+    one torch thread (the cores go to the environments), subprocess environments
+    when there are several, periodic deterministic evaluation (``-1``: none)."""
+    argv = [
+        "--algo", algo,
+        "--env", env_id,
+        "--gym-packages", "graspenv",
+        "--conf-file", str(config),
+        "--seed", str(seed),
+        "--log-folder", str(out),
+        "--tensorboard-log", str(out / "tb"),
+        "--num-threads", "1",
+        "--eval-freq", str(eval_freq),
+        "--eval-episodes", str(eval_episodes),
+        "--save-freq", str(save_freq),
+        "--verbose", "0",
+    ]  # fmt: skip
+    if n_envs > 1:
+        argv += ["--vec-env", "subproc"]
+    if steps is not None:
+        argv += ["--n-timesteps", str(steps)]
+    if progress_bar:
+        argv.append("--progress")
+    return argv
+
+
+def run_zoo(argv: Sequence[str]) -> None:
+    """``python -m rl_zoo3.train ARGV`` in this process (the zoo reads ``sys.argv``)."""
+    from rl_zoo3.train import train as zoo_train
+
+    saved = sys.argv
+    sys.argv = ["rl_zoo3.train", *argv]
+    try:
+        zoo_train()
+    finally:
+        sys.argv = saved
 
 
 def train(
@@ -140,164 +163,92 @@ def train(
     config: str | Path | None = None,
     out: str | Path = "runs/train",
     steps: int | None = None,
-    n_envs: int | None = None,
     progress: Callable[[str], None] | None = None,
     progress_bar: bool = True,
-    after_eval: BaseCallback | None = None,
+    eval_freq: int = 5_000,
+    eval_episodes: int = 10,
+    save_freq: int = 25_000,
 ) -> TrainResult:
-    """Train and evaluate one agent; see the module docstring for the run folder.
+    """Train one baseline with the zoo; see the module docstring for the run folder.
 
     Args:
         env_id: a graspenv environment id.
         algo: ``ppo`` or ``sac``.
-        seed: seeds the algorithm and the environments (evaluation: ``seed + 10_000``).
-        config: hyperparameter file (default ``agents/hyperparams/<algo>.toml``).
-        out: parent of the run folder.
-        steps, n_envs: override the file's ``n_timesteps`` and ``n_envs``.
-        progress: receives the status lines before training starts (default: stderr).
-        progress_bar: show stable-baselines3's progress bar (tqdm and rich) while
-            training; what training logs goes to ``progress.csv`` and ``tb/``.
-        after_eval: a callback run after each periodic evaluation (its ``parent``
-            is SB3's ``EvalCallback``; ``graspenv tune`` reports from it).
+        seed: seeds the zoo's run (model, environments, evaluation).
+        config: hyperparameter file (default ``agents/hyperparams/<algo>.yml``).
+        out: the zoo's log folder.
+        steps: override the entry's ``n_timesteps``.
+        progress: receives the status lines (default: stderr).
+        progress_bar: show stable-baselines3's progress bar while training.
+        eval_freq, eval_episodes: the zoo's periodic evaluation (-1: none).
+        save_freq: steps between checkpoints (-1: none).
     """
     check_env_id(env_id)
-    for name in LOGGING_PACKAGES:
-        # Without them stable-baselines3 stops on an assertion once training is under
+    for name in TRAINING_PACKAGES:
+        # Without them the zoo or stable-baselines3 stops once training is under
         # way; the `graspenv` command turns this error into "install the training extra".
         if importlib.util.find_spec(name) is None:
             raise ModuleNotFoundError(f"no module named {name!r}", name=name)
-    settings = load_hyperparams(env_id, algo, config)
-    if steps is not None:
-        settings["n_timesteps"] = steps
-    if n_envs is not None:
-        settings["n_envs"] = n_envs
-    if settings["n_envs"] == 0:
-        settings["n_envs"] = len(os.sched_getaffinity(0))
-    if settings["n_timesteps"] < 1 or settings["n_envs"] < 1:
-        raise ValueError("n_timesteps and n_envs must be positive")
-    make_env(env_id, settings["env_kwargs"], settings["env_wrapper"]).close()  # fail early
-
-    torch.set_num_threads(settings["torch_threads"])
-    folder = run_folder(Path(out), env_id, algo, seed)
+    path = Path(config) if config is not None else default_file(algo)
+    settings = load_hyperparams(env_id, algo, path)  # fail before the zoo starts
+    if steps is not None and steps < 1:
+        raise ValueError(f"steps must be positive, got {steps}")
+    out = Path(out)
+    argv = zoo_arguments(
+        env_id,
+        algo,
+        seed,
+        path,
+        out,
+        steps,
+        eval_freq,
+        eval_episodes,
+        save_freq,
+        progress_bar,
+        int(settings.get("n_envs", 1)),
+    )
+    say = progress or _stderr
+    say("python -m rl_zoo3.train " + shlex.join(argv))
+    runs, logs = out / algo, out / "tb" / env_id.replace("/", "-")
+    before = set(runs.glob("*")) | set(logs.glob("*"))
+    started = time.strftime("%Y-%m-%dT%H:%M:%S%z")
+    start = time.perf_counter()
+    run_zoo(argv)
+    wall = time.perf_counter() - start
+    folder, tensorboard = (_newest(where, before) for where in (runs, logs))
+    if folder is None:
+        raise RuntimeError(f"the zoo wrote no run folder under {runs}")
+    name = env_id.replace("/", "-")
+    model = algorithm(algo).load(folder / f"{name}.zip", device="cpu")
+    model.policy.save(folder / "policy.pt")
+    if (folder / name / "vecnormalize.pkl").is_file():
+        shutil.copy(folder / name / "vecnormalize.pkl", folder / "vecnormalize.pkl")
+    curve = write_learning_curve(folder, env_id, algo)
+    final = float(curve[-1][2]) if curve else None
     record: dict[str, Any] = {
         "env_id": env_id,
         "algo": algo,
         "seed": seed,
         "hyperparams": settings,
-        "hyperparams_file": str(config or "built-in"),
-        "command": sys.argv,
+        "hyperparams_file": str(path),
+        "command": "python -m rl_zoo3.train " + shlex.join(argv),
         "versions": versions(),
         "git_commit": git_commit(Path(__file__).parent),
-        "started": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "started": started,
+        "finished": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+        "wall_time_s": round(wall, 1),
+        "tensorboard": None if tensorboard is None else str(tensorboard),
+        "steps": int(model.num_timesteps),
+        "last_eval_success": final,
     }
-    _write_json(folder / "run.json", record)
-
-    n = settings["n_envs"]
-    envs = make_vec_env(env_id, settings, n, seed, folder / "monitor")
-    eval_env = make_vec_env(env_id, settings, 1, seed + 10_000)
-    if settings["normalize"]:
-        gamma = float(settings.get("gamma", 0.99))
-        envs = VecNormalize(envs, gamma=gamma)
-        eval_env = VecNormalize(eval_env, training=False, norm_reward=False, gamma=gamma)
-    model = algorithm(algo)(
-        settings["policy"], envs, seed=seed, verbose=0, **algorithm_kwargs(settings)
-    )
-    if settings["demo_episodes"]:
-        demos = prefill(model, env_id, settings, seed + 20_000)
-        record["demonstrations"] = demos
-        _write_json(folder / "run.json", record)
-        (progress or _stderr)(
-            f"replay buffer filled with {settings['demo_episodes']} episodes of "
-            f"{settings['demonstrations']} ({demos['transitions']} transitions, "
-            f"{demos['successes']} successes)"
-        )
-    model.set_logger(
-        Logger(
-            str(folder),
-            [
-                make_output_format("csv", str(folder)),
-                make_output_format("tensorboard", str(folder / "tb")),
-            ],
-        )
-    )
-    evaluation = EvalCallback(
-        eval_env,
-        n_eval_episodes=settings["eval_episodes"],
-        eval_freq=max(settings["eval_freq"] // n, 1),
-        log_path=str(folder),
-        best_model_save_path=str(folder),
-        deterministic=True,
-        verbose=0,
-        callback_after_eval=after_eval,
-    )
-    callbacks = CallbackList(
-        [
-            evaluation,
-            CheckpointCallback(
-                max(settings["checkpoint_freq"] // n, 1),
-                str(folder / "checkpoints"),
-                name_prefix="model",
-                save_vecnormalize=True,
-            ),
-        ]
-    )
-    start = time.perf_counter()
-    try:
-        model.learn(settings["n_timesteps"], callback=callbacks, progress_bar=progress_bar)
-    finally:
-        envs.close()
-        eval_env.close()
-        model.logger.close()
-    wall = time.perf_counter() - start
-    model.save(folder / "model.zip")
-    if settings["normalize"]:
-        model.get_vec_normalize_env().save(str(folder / "vecnormalize.pkl"))
-    curve = write_learning_curve(folder, env_id, algo)
-    final = float(curve[-1][2]) if curve else None
-    record.update(
-        finished=time.strftime("%Y-%m-%dT%H:%M:%S%z"),
-        wall_time_s=round(wall, 1),
-        steps=int(model.num_timesteps),
-        last_eval_success=final,
-    )
     _write_json(folder / "run.json", record)
     return TrainResult(folder, int(model.num_timesteps), wall, final)
 
 
-def prefill(model: Any, env_id: str, settings: dict[str, Any], first_seed: int) -> dict[str, int]:
-    """Play ``demo_episodes`` episodes of the scripted strategy and add every
-    transition to the model's replay buffer (what the policy will see: the same
-    environment arguments and wrapper)."""
-    spec = load_agent(settings["demonstrations"])
-    env = make_env(env_id, settings["env_kwargs"], settings["env_wrapper"])
-    agent = spec.build(env)
-    transitions = successes = 0
-    try:
-        for episode in range(settings["demo_episodes"]):
-            obs, info = env.reset(seed=first_seed + episode)
-            agent.reset()
-            done = False
-            while not done:
-                action, _ = agent.predict(obs)
-                next_obs, reward, terminated, truncated, info = env.step(action)
-                model.replay_buffer.add(
-                    np.asarray(obs)[None],
-                    np.asarray(next_obs)[None],
-                    np.asarray(action)[None],
-                    np.array([reward]),
-                    np.array([terminated]),
-                    [{"TimeLimit.truncated": truncated and not terminated}],
-                )
-                obs, done = next_obs, terminated or truncated
-                transitions += 1
-            successes += bool(info["is_success"])
-    finally:
-        env.close()
-    return {
-        "episodes": settings["demo_episodes"],
-        "transitions": transitions,
-        "successes": successes,
-    }
+def _newest(where: Path, before: set[Path]) -> Path | None:
+    """The folder the zoo made in ``where`` during this run."""
+    new = sorted(set(where.glob("*")) - before, key=lambda p: p.stat().st_mtime)
+    return new[-1] if new else None
 
 
 def _write_json(path: Path, data: dict[str, Any]) -> None:

@@ -1,8 +1,8 @@
 """``graspenv tune``: a hyperparameter sweep of a baseline with Ray Tune.
 
 A search space file (TOML) names, for each hyperparameter to sweep, its
-distribution, and in ``[fixed]`` the settings every trial shares (a shorter run, a
-cheaper evaluation)::
+distribution, and in ``[fixed]`` the settings every trial shares (a shorter run;
+``eval_freq`` and ``eval_episodes`` set the trials' evaluation)::
 
     [fixed]
     n_timesteps = 20_000
@@ -13,34 +13,40 @@ cheaper evaluation)::
 
 Distributions: ``uniform``, ``loguniform`` (``[low, high]``), ``randint`` (``[low,
 high)``) and ``choice`` (a list). Each trial writes its hyperparameter file, the
-algorithm's file with the trial's values in the environment's table (the format
-``graspenv train --config`` reads, checked by the same loader), and trains from it
-with :func:`graspenv_agents.train.train` on one CPU. After every periodic evaluation
-it reports the success rate on the evaluation seeds (``seed + 10_000`` onwards,
-held out from training and from the benchmark's seeds) to Tune, whose ASHA
-scheduler stops the trials that trail. The best trial's file is written as
-``best.toml`` (with its success rate in a comment) and ``sweep.csv`` lists every
-trial.
+environment's entry of the algorithm's zoo file with the trial's values (the format
+``graspenv train --config`` and the zoo read, checked by the same loader), and
+trains from it with rl-baselines3-zoo (:func:`graspenv_agents.train.train`) on one
+CPU. Its file adds the callback :class:`TuneReport`, which evaluates the policy
+every ``eval_freq`` steps on the evaluation seeds (``seed + 10_000`` onwards, held
+out from training and from the benchmark's seeds) and reports the success rate to
+Tune, whose ASHA scheduler stops the trials that trail. The best trial's entry is
+written as ``best.yml`` (with its success rate in a comment, without the
+reporting callback) and ``sweep.csv`` lists every trial.
 """
 
 from __future__ import annotations
 
 import csv
-import json
 import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+from stable_baselines3.common.callbacks import EvalCallback
+from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
 from graspenv import cluster
 
-from .hyperparams import ALGOS, default_file, load_hyperparams
-from .loading import check_env_id
+from .hyperparams import ALGOS, default_file, load_hyperparams, write_hyperparams
+from .loading import check_env_id, make_env
 
-__all__ = ["TuneResult", "load_space", "to_toml", "tune"]
+__all__ = ["TuneReport", "TuneResult", "load_space", "tune"]
 
 _DISTRIBUTIONS = ("uniform", "loguniform", "randint", "choice")
+#: What a space file's [fixed] may set for the trials' evaluation (not hyperparameters).
+EVALUATION = {"eval_freq": 5_000, "eval_episodes": 10}
 
 
 @dataclass(frozen=True)
@@ -86,62 +92,91 @@ def load_space(path: str | Path) -> tuple[dict[str, Any], dict[str, tuple[str, A
     return dict(data.get("fixed", {})), space
 
 
-def _value(value: Any) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, int | float):
-        return repr(value)
-    if isinstance(value, str):
-        return json.dumps(value)  # a TOML basic string is a JSON string
-    if isinstance(value, list | tuple):
-        return "[" + ", ".join(_value(v) for v in value) + "]"
-    if isinstance(value, dict):
-        return "{ " + ", ".join(f"{k} = {_value(v)}" for k, v in value.items()) + " }"
-    raise TypeError(f"no TOML for {value!r}")
+class TuneReport(EvalCallback):
+    """stable-baselines3's periodic evaluation, on its own environment, reporting
+    each success rate to Ray Tune (``success``, against ``timesteps``).
+
+    The zoo builds callbacks from keyword arguments alone, so this one makes its
+    evaluation environment from the environment id, arguments and wrapper.
+    """
+
+    def __init__(
+        self,
+        env_id: str,
+        eval_freq: int,
+        episodes: int,
+        seed: int,
+        env_kwargs: dict[str, Any] | None = None,
+        env_wrapper: str = "",
+    ) -> None:
+        wrapper = env_wrapper
+        env = DummyVecEnv([lambda: make_env(env_id, dict(env_kwargs or {}), wrapper)])
+        env.seed(seed)
+        super().__init__(env, n_eval_episodes=episodes, eval_freq=eval_freq, verbose=0)
+
+    def _init_callback(self) -> None:
+        # Observations normalised in training are normalised alike here (SB3 syncs
+        # the statistics before each evaluation).
+        if isinstance(self.training_env, VecNormalize) and not isinstance(
+            self.eval_env, VecNormalize
+        ):
+            self.eval_env = VecNormalize(self.eval_env, training=False, norm_reward=False)
+        super()._init_callback()
+
+    def _on_step(self) -> bool:
+        # As EvalCallback decides (its success list fills only with a log_path).
+        evaluates = self.eval_freq > 0 and self.n_calls % self.eval_freq == 0
+        keep_going = super()._on_step()
+        if evaluates:
+            from ray import tune as ray_tune
+
+            success = float(np.mean(self._is_success_buffer)) if self._is_success_buffer else 0.0
+            ray_tune.report({"success": success, "timesteps": int(self.num_timesteps)})
+        return keep_going
 
 
-def to_toml(tables: dict[str, dict[str, Any]], comment: str = "") -> str:
-    """A hyperparameter file: ``[defaults]`` and per-environment tables of plain
-    values (what :func:`graspenv_agents.hyperparams.load_hyperparams` reads)."""
-    lines = [f"# {line}" for line in comment.splitlines()]
-    for name, table in tables.items():
-        header = name if name.isidentifier() else json.dumps(name)
-        lines += ["", f"[{header}]"]
-        lines += [f"{key} = {_value(value)}" for key, value in table.items()]
-    return "\n".join(lines).lstrip("\n") + "\n"
-
-
-def trial_file(env_id: str, algo: str, base: Path, overrides: dict[str, Any], folder: Path) -> Path:
-    """The algorithm's file with ``overrides`` in the environment's table, checked by
-    the loader that training uses."""
-    tables = tomllib.loads(base.read_text())
-    tables[env_id] = {**tables.get(env_id, {}), **overrides}
-    folder.mkdir(parents=True, exist_ok=True)
-    path = folder / f"{algo}.toml"
-    path.write_text(to_toml(tables, f"graspenv tune trial for {env_id}"))
+def trial_file(
+    env_id: str,
+    algo: str,
+    entry: dict[str, Any],
+    folder: Path,
+    seed: int,
+    evaluation: dict[str, int],
+) -> Path:
+    """A file with the trial's entry and the reporting callback, checked by the
+    loader that training uses."""
+    report = {
+        "graspenv_agents.tune.TuneReport": {
+            "env_id": env_id,
+            "eval_freq": evaluation["eval_freq"],
+            "episodes": evaluation["eval_episodes"],
+            "seed": seed + 10_000,
+            "env_kwargs": dict(entry.get("env_kwargs", {})),
+            "env_wrapper": str(entry.get("env_wrapper", "")),
+        }
+    }
+    callbacks = entry.get("callback", [])
+    callbacks = list(callbacks) if isinstance(callbacks, list) else [callbacks]
+    path = write_hyperparams(
+        folder / f"{algo}.yml",
+        {env_id: {**entry, "callback": [*callbacks, report]}},
+        f"graspenv tune trial for {env_id}",
+    )
     load_hyperparams(env_id, algo, path)
     return path
 
 
 def _trial(config: dict[str, Any]) -> None:
-    """One Tune trial (runs in a Ray worker): train from its file, reporting."""
-    import numpy as np
+    """One Tune trial (runs in a Ray worker): train from its file with the zoo."""
     from ray import tune as ray_tune
-    from stable_baselines3.common.callbacks import BaseCallback
 
     from .train import train
-
-    class Report(BaseCallback):
-        def _on_step(self) -> bool:
-            successes = getattr(self.parent, "evaluations_successes", [])
-            success = float(np.mean(successes[-1])) if successes else 0.0
-            ray_tune.report({"success": success, "timesteps": int(self.num_timesteps)})
-            return True
 
     meta = config["_graspenv"]
     overrides = {**meta["fixed"], **{k: v for k, v in config.items() if k != "_graspenv"}}
     folder = Path(meta["out"]) / "trials" / f"trial-{ray_tune.get_context().get_trial_id()}"
-    path = trial_file(meta["env_id"], meta["algo"], Path(meta["base"]), overrides, folder)
+    entry = {**load_hyperparams(meta["env_id"], meta["algo"], Path(meta["base"])), **overrides}
+    path = trial_file(meta["env_id"], meta["algo"], entry, folder, meta["seed"], meta["evaluation"])
     train(
         meta["env_id"],
         meta["algo"],
@@ -150,7 +185,8 @@ def _trial(config: dict[str, Any]) -> None:
         out=folder,
         progress=lambda line: None,
         progress_bar=False,
-        after_eval=Report(),
+        eval_freq=-1,
+        save_freq=-1,
     )
 
 
@@ -172,10 +208,10 @@ def tune(
         algo: ``ppo`` or ``sac``.
         space_file: the search space.
         trials: configurations drawn from the space.
-        out: folder for the trials, ``sweep.csv`` and ``best.toml``.
+        out: folder for the trials, ``sweep.csv`` and ``best.yml``.
         seed: every trial's training seed.
         config: the hyperparameter file the trials start from (default
-            ``agents/hyperparams/<algo>.toml``).
+            ``agents/hyperparams/<algo>.yml``).
         address: an existing Ray cluster (default: a local instance).
     """
     check_env_id(env_id)
@@ -184,10 +220,12 @@ def tune(
     if trials < 1:
         raise ValueError(f"trials must be at least 1, got {trials}")
     fixed, space = load_space(space_file)
+    evaluation = {key: int(fixed.pop(key, default)) for key, default in EVALUATION.items()}
     base = Path(config) if config is not None else default_file(algo)
     out = Path(out).resolve()
     # Fail before any trial starts: the file with fixed settings must load.
-    settings = load_hyperparams(env_id, algo, trial_file(env_id, algo, base, fixed, out / "check"))
+    settings = {**load_hyperparams(env_id, algo, base), **fixed}
+    trial_file(env_id, algo, settings, out / "check", seed, evaluation)
     cluster.connect(address)
     from ray import tune as ray_tune
     from ray.tune.schedulers import ASHAScheduler
@@ -206,12 +244,13 @@ def tune(
         "fixed": fixed,
         "out": str(out),
         "seed": seed,
+        "evaluation": evaluation,
     }
     steps = int(settings["n_timesteps"])
     scheduler = ASHAScheduler(
         time_attr="timesteps",
         max_t=steps,
-        grace_period=max(1, min(steps, int(settings["eval_freq"]))),
+        grace_period=max(1, min(steps, evaluation["eval_freq"])),
         reduction_factor=2,
     )
     tuner = ray_tune.Tuner(
@@ -237,16 +276,13 @@ def tune(
     best_success = float(
         history["success"].max() if history is not None else (best.metrics or {})["success"]
     )
-    tables = tomllib.loads(base.read_text())
-    tables[env_id] = {**tables.get(env_id, {}), **fixed, **best_params}
-    best_file = out / "best.toml"
-    best_file.write_text(
-        to_toml(
-            tables,
-            f"graspenv tune: best of {len(rows)} trials of {algo} on {env_id}\n"
-            f"success on the evaluation seeds: {best_success:.2f}\n"
-            f"train with: graspenv train --env {env_id} --algo {algo} --config {best_file}",
-        )
+    best_file = out / "best.yml"
+    write_hyperparams(
+        best_file,
+        {env_id: {**settings, **best_params}},
+        f"graspenv tune: best of {len(rows)} trials of {algo} on {env_id}\n"
+        f"success on the evaluation seeds: {best_success:.2f}\n"
+        f"train with: graspenv train --env {env_id} --algo {algo} --config {best_file}",
     )
     load_hyperparams(env_id, algo, best_file)
     sweep = out / "sweep.csv"

@@ -10,40 +10,60 @@ import numpy as np
 import pytest
 
 from graspenv.plots import bar_chart, line_chart
-from graspenv_agents.hyperparams import algorithm_kwargs, default_file, load_hyperparams
-from graspenv_agents.wrappers import RelativeGoal
+from graspenv_agents.hyperparams import default_file, load_hyperparams, write_hyperparams
+from graspenv_agents.wrappers import WRAPPERS, RelativeGoal
 
 
-def test_environment_table_overrides_defaults(tmp_path: Path) -> None:
+def test_an_entry_is_read_as_the_zoo_reads_it(tmp_path: Path) -> None:
     pytest.importorskip("stable_baselines3")  # the file's keys are checked against SAC's
-    path = tmp_path / "sac.toml"
-    path.write_text(
-        "[defaults]\nbatch_size = 64\ngamma = 0.9\n\n"
-        '["graspenv/SqueezeSlide-v0"]\nbatch_size = 128\n'
+    path = tmp_path / "sac.yml"
+    write_hyperparams(
+        path,
+        {
+            "graspenv/SqueezeSlide-v0": {"n_timesteps": 100, "batch_size": 128},
+            "graspenv/TurnInPlace-v0": {"n_timesteps": 200, "gamma": 0.9},
+        },
+        "two entries",
     )
+    assert path.read_text().startswith("# two entries\n")
     slide = load_hyperparams("graspenv/SqueezeSlide-v0", "sac", path)
-    turn = load_hyperparams("graspenv/TurnInPlace-v0", "sac", path)
-    assert (slide["batch_size"], slide["gamma"]) == (128, 0.9)
-    assert (turn["batch_size"], turn["gamma"]) == (64, 0.9)
-    assert turn["n_envs"] == 1 and turn["policy"] == "MlpPolicy"  # run settings' defaults
+    assert slide == {"n_timesteps": 100, "batch_size": 128}
+    assert load_hyperparams("graspenv/TurnInPlace-v0", "sac", path)["gamma"] == 0.9
 
 
-def test_shipped_files_load_for_every_environment() -> None:
+def test_shipped_files_have_an_entry_for_every_environment() -> None:
     pytest.importorskip("stable_baselines3")  # keys checked against PPO's and SAC's
     import graspenv
 
     for algo in ("ppo", "sac"):
         assert default_file(algo).is_file()
         for env_id in graspenv.ENV_IDS:
-            kwargs = algorithm_kwargs(load_hyperparams(env_id, algo))
-            assert "n_timesteps" not in kwargs and "policy_kwargs" in kwargs
+            entry = load_hyperparams(env_id, algo)
+            assert entry["env_wrapper"] in WRAPPERS and "policy_kwargs" in entry
 
 
-def test_activation_names_become_torch_modules() -> None:
-    torch = pytest.importorskip("torch")
+def test_scripted_demonstrations_need_a_replay_buffer_and_plain_observations() -> None:
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3 import PPO, SAC
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
-    kwargs = algorithm_kwargs({"policy_kwargs": {"activation_fn": "tanh"}})
-    assert kwargs["policy_kwargs"]["activation_fn"] is torch.nn.Tanh
+    from graspenv_agents.zoo import ScriptedDemonstrations
+
+    with pytest.raises(ValueError, match="episodes"):
+        ScriptedDemonstrations("pinch-and-turn", episodes=0)
+    with pytest.raises(ValueError, match="unknown scripted strategy"):
+        ScriptedDemonstrations("juggle")
+
+    def make() -> gym.Env:
+        return gym.make("graspenv/TurnInPlace-v0")
+
+    for model, message in (
+        (PPO("MlpPolicy", DummyVecEnv([make]), n_steps=64), "off-policy"),
+        (SAC("MlpPolicy", VecNormalize(DummyVecEnv([make])), buffer_size=100), "normalize"),
+    ):
+        with pytest.raises(ValueError, match=message):
+            model.learn(1, callback=ScriptedDemonstrations("pinch-and-turn", episodes=1))
+        model.get_env().close()
 
 
 def test_relative_goal_features_match_the_true_errors() -> None:

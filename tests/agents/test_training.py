@@ -1,4 +1,5 @@
-"""`graspenv train` → `graspenv eval` on a short run, and the run folder it leaves."""
+"""`graspenv train` (rl-baselines3-zoo underneath) → `graspenv eval` on a short run,
+and the run folder it leaves."""
 
 from __future__ import annotations
 
@@ -11,28 +12,30 @@ import pytest
 from graspenv.cli import main
 
 pytest.importorskip("stable_baselines3")
+pytest.importorskip("rl_zoo3")
 event_accumulator = pytest.importorskip("tensorboard.backend.event_processing.event_accumulator")
 # stable-baselines3 silences its progress bar's warning (tqdm's rich bar is marked
 # experimental) when imported; pytest restores the warning filters before each test.
 pytestmark = pytest.mark.filterwarnings("ignore:rich is experimental")
 
-# Small enough for a few seconds of training; the evaluation and checkpoint
-# frequencies make both happen within the run.
+# Small enough for a few seconds of training, in the zoo's format; the evaluation
+# and checkpoint frequencies (`--eval-freq`, and `save_freq` below) make both happen.
 SHORT = """
-[defaults]
-n_envs = 1
-normalize = true
-env_wrapper = "relative_goal"
-eval_freq = 512
-eval_episodes = 2
-checkpoint_freq = 512
+graspenv/TurnInPlace-v0:
+  n_timesteps: 1024
+  policy: MlpPolicy
+  n_envs: 1
+  normalize: {normalize}
+  env_wrapper: graspenv_agents.wrappers.RelativeGoal
+  policy_kwargs: "dict(net_arch=[32, 32])"
 {algo_keys}
 """
 ALGO_KEYS = {
-    "ppo": "n_steps = 256\nbatch_size = 64\nn_epochs = 2\npolicy_kwargs = { net_arch = [32, 32] }",
-    "sac": "learning_starts = 200\nbatch_size = 64\ntrain_freq = 4\ngradient_steps = 1\n"
-    "buffer_size = 5000\npolicy_kwargs = { net_arch = [32, 32] }\n"
-    'demonstrations = "scripted:pinch-and-turn"\ndemo_episodes = 1',
+    "ppo": "  n_steps: 256\n  batch_size: 64\n  n_epochs: 2\n",
+    "sac": "  learning_starts: 200\n  batch_size: 64\n  train_freq: 4\n  gradient_steps: 1\n"
+    "  buffer_size: 5000\n  callback:\n"
+    "    - graspenv_agents.zoo.ScriptedDemonstrations:\n"
+    "        strategy: pinch-and-turn\n        episodes: 1\n",
 }
 
 
@@ -40,8 +43,10 @@ ALGO_KEYS = {
 def run_folder(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
     algo = request.param
     root = tmp_path_factory.mktemp(algo)
-    config = root / f"{algo}.toml"
-    config.write_text(SHORT.format(algo_keys=ALGO_KEYS[algo]))
+    config = root / f"{algo}.yml"
+    # SAC's demonstrations refuse normalised observations (tested below).
+    normalize = "true" if algo == "ppo" else "false"
+    config.write_text(SHORT.format(normalize=normalize, algo_keys=ALGO_KEYS[algo]))
     code = main(
         [
             "train",
@@ -51,16 +56,18 @@ def run_folder(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPath
             algo,
             "--config",
             str(config),
-            "--steps",
-            "1024",
             "--seed",
             "3",
             "--out",
             str(root / "runs"),
+            "--eval-freq",
+            "512",
+            "--eval-episodes",
+            "2",
         ]
     )
     assert code == 0
-    (folder,) = (root / "runs").iterdir()
+    (folder,) = (root / "runs" / algo).iterdir()
     return folder
 
 
@@ -69,18 +76,36 @@ def test_run_folder_records_everything(run_folder: Path) -> None:
     assert run["env_id"] == "graspenv/TurnInPlace-v0" and run["seed"] == 3
     assert run["steps"] >= 1024 and run["wall_time_s"] > 0
     assert run["hyperparams"]["n_timesteps"] == 1024
-    assert run["hyperparams"]["eval_episodes"] == 2
-    if run["algo"] == "sac":  # one scripted episode went into the replay buffer first
-        assert run["demonstrations"]["episodes"] == 1
-        assert run["demonstrations"]["transitions"] > 10
-    assert {"graspenv", "stable-baselines3", "torch", "pybullet"} <= set(run["versions"])
-    for name in ("model.zip", "best_model.zip", "vecnormalize.pkl", "progress.csv"):
-        assert (run_folder / name).is_file(), name
-    assert list((run_folder / "checkpoints").glob("model_*_steps.zip"))
+    assert run["command"].startswith("python -m rl_zoo3.train --algo ")
+    assert "--seed 3" in run["command"] and "--gym-packages graspenv" in run["command"]
+    assert {"graspenv", "stable-baselines3", "rl_zoo3", "torch", "pybullet"} <= set(run["versions"])
+    name = "graspenv-TurnInPlace-v0"
+    for file in (f"{name}.zip", "best_model.zip", "policy.pt", "evaluations.npz"):
+        assert (run_folder / file).is_file(), file
+    assert (run_folder / name / "config.yml").is_file()
+    if run["algo"] == "ppo":
+        assert (run_folder / "vecnormalize.pkl").is_file()
     rows = (run_folder / "evaluations.csv").read_text().splitlines()
     assert rows[0] == "steps,mean_return,success_rate" and len(rows) >= 3
     curve = cv2.imread(str(run_folder / "learning_curve.png"))
     assert curve is not None and curve.shape[0] > 100
+
+
+@pytest.mark.parametrize("run_folder", ["sac"], indirect=True)
+def test_demonstrations_fill_the_replay_buffer_first(run_folder: Path) -> None:
+    """The SAC run's file names the scripted head start; the zoo ran it before the
+    first step (its TensorBoard log records what went in)."""
+    log = event_accumulator.EventAccumulator(str(_events(run_folder)))
+    log.Reload()
+    transitions = log.Scalars("demonstrations/transitions")
+    assert transitions and transitions[0].value > 10
+
+
+def _events(run_folder: Path) -> Path:
+    """The run's TensorBoard event file (``run.json`` names its folder)."""
+    run = json.loads((run_folder / "run.json").read_text())
+    (events,) = Path(run["tensorboard"]).glob("events.out.tfevents.*")
+    return events
 
 
 #: Scalars each algorithm's run logs (besides the evaluation's and the clock's).
@@ -91,8 +116,7 @@ TRAINING_TAGS = {
 
 
 def test_tensorboard_log_holds_the_training_scalars(run_folder: Path) -> None:
-    (events,) = (run_folder / "tb").glob("events.out.tfevents.*")
-    log = event_accumulator.EventAccumulator(str(events))
+    log = event_accumulator.EventAccumulator(str(_events(run_folder)))
     log.Reload()
     tags = set(log.Tags()["scalars"])
     algo = json.loads((run_folder / "run.json").read_text())["algo"]
@@ -118,7 +142,7 @@ def test_eval_refuses_a_model_on_another_observation_space(
         [
             "eval",
             "--agent",
-            str(run_folder / "model.zip"),
+            str(run_folder / "graspenv-TurnInPlace-v0.zip"),
             "--env",
             "graspenv/TopRub-v0",
             "--episodes",

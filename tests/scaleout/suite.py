@@ -96,16 +96,16 @@ def test_eval_on_ray_gives_the_local_summary(
 
 
 def test_tune_runs_a_small_sweep(local_ray: None, tmp_path: Path) -> None:
-    import tomllib
-
     from graspenv_agents.hyperparams import load_hyperparams
     from graspenv_agents.tune import tune
 
     space = tmp_path / "space.toml"
     space.write_text(
         "[fixed]\n"
-        "n_timesteps = 200\neval_freq = 100\neval_episodes = 1\ncheckpoint_freq = 1000\n"
-        "demo_episodes = 2\nlearning_starts = 50\nbuffer_size = 5000\n"
+        "n_timesteps = 200\neval_freq = 100\neval_episodes = 1\n"
+        "learning_starts = 50\nbuffer_size = 5000\n"
+        'callback = [{ "graspenv_agents.zoo.ScriptedDemonstrations" = '
+        '{ strategy = "pinch-and-turn", episodes = 2 } }]\n'
         "[space.learning_rate]\nloguniform = [1e-4, 3e-3]\n"
         "[space.gamma]\nchoice = [0.9, 0.95]\n"
     )
@@ -116,8 +116,16 @@ def test_tune_runs_a_small_sweep(local_ray: None, tmp_path: Path) -> None:
     assert settings["n_timesteps"] == 200 and settings["gamma"] in (0.9, 0.95)
     assert 1e-4 <= settings["learning_rate"] <= 3e-3
     assert settings["learning_rate"] == result.best_config["learning_rate"]
-    table = tomllib.loads(result.best_file.read_text())["graspenv/TurnInPlace-v0"]
-    assert table["demonstrations"] == "scripted:pinch-and-turn"  # the rest kept
+    assert settings["env_wrapper"] == "graspenv_agents.wrappers.RelativeGoal"  # the rest kept
+    # The trials' reporting callback is not part of the best configuration.
+    assert settings["callback"] == [
+        {
+            "graspenv_agents.zoo.ScriptedDemonstrations": {
+                "strategy": "pinch-and-turn",
+                "episodes": 2,
+            }
+        }
+    ]
     rows = (tmp_path / "tune" / "sweep.csv").read_text().splitlines()
     assert len(rows) == 3 and rows[0].startswith("learning_rate,gamma,success")
 

@@ -17,7 +17,10 @@ named in a file's ``callback`` list with its keyword arguments::
 Before the first training step it plays that many episodes of the strategy in the
 training environments themselves (so with the file's wrapper and arguments), adds
 every transition to the replay buffer, and resets the environments to where
-training would have started.
+training would have started. With ``behaviour_cloning: N`` it then fits the actor's
+deterministic action to the strategy's on those transitions for N gradient steps,
+so that training starts from a policy that already does roughly what the
+strategy does.
 """
 
 from __future__ import annotations
@@ -45,13 +48,23 @@ class ScriptedDemonstrations(BaseCallback):
     """
 
     def __init__(
-        self, strategy: str, episodes: int = 50, seed: int = 20_000, verbose: int = 1
+        self,
+        strategy: str,
+        episodes: int = 50,
+        seed: int = 20_000,
+        behaviour_cloning: int = 0,
+        verbose: int = 1,
     ) -> None:
         super().__init__(verbose)
         if episodes < 1:
             raise ValueError(f"ScriptedDemonstrations: episodes must be >= 1, got {episodes}")
+        if behaviour_cloning < 0:
+            raise ValueError(
+                f"ScriptedDemonstrations: behaviour_cloning must be >= 0, got {behaviour_cloning}"
+            )
         self.spec = load_agent(f"scripted:{strategy}")
         self.strategy, self.episodes, self.first_seed = strategy, episodes, seed
+        self.behaviour_cloning = behaviour_cloning
         self.transitions = self.successes = 0
 
     def _on_training_start(self) -> None:
@@ -94,12 +107,33 @@ class ScriptedDemonstrations(BaseCallback):
         model._last_episode_starts = np.ones(env.num_envs, dtype=bool)
         self.logger.record("demonstrations/transitions", self.transitions)
         self.logger.record("demonstrations/successes", self.successes)
+        if self.behaviour_cloning:
+            self.logger.record("demonstrations/cloning_loss", self._clone(model))
         if self.verbose:
             print(
                 f"replay buffer filled with {done_episodes} episodes of {self.strategy} "
                 f"({self.transitions} transitions, {self.successes} successes)",
                 flush=True,
             )
+
+    def _clone(self, model: Any) -> float:
+        """Fit the actor's deterministic action to the demonstrated one (mean
+        squared error, the actor's own optimiser); the last batch's loss."""
+        import torch
+
+        actor = model.actor
+        loss = torch.zeros(())
+        actor.set_training_mode(True)
+        for _ in range(self.behaviour_cloning):
+            batch = model.replay_buffer.sample(model.batch_size)
+            loss = torch.nn.functional.mse_loss(
+                actor(batch.observations, deterministic=True), batch.actions
+            )
+            actor.optimizer.zero_grad()
+            loss.backward()
+            actor.optimizer.step()
+        actor.set_training_mode(False)
+        return float(loss)
 
     def _on_step(self) -> bool:
         return True

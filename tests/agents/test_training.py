@@ -35,7 +35,7 @@ ALGO_KEYS = {
     "sac": "  learning_starts: 200\n  batch_size: 64\n  train_freq: 4\n  gradient_steps: 1\n"
     "  buffer_size: 5000\n  callback:\n"
     "    - graspenv_agents.zoo.ScriptedDemonstrations:\n"
-    "        strategy: pinch-and-turn\n        episodes: 1\n",
+    "        strategy: pinch-and-turn\n        episodes: 1\n        behaviour_cloning: 20\n",
 }
 
 
@@ -99,6 +99,8 @@ def test_demonstrations_fill_the_replay_buffer_first(run_folder: Path) -> None:
     log.Reload()
     transitions = log.Scalars("demonstrations/transitions")
     assert transitions and transitions[0].value > 10
+    (loss,) = log.Scalars("demonstrations/cloning_loss")
+    assert 0.0 < loss.value < 4.0  # actions in [-1, 1]: a squared error of at most 4
 
 
 def _events(run_folder: Path) -> Path:

@@ -31,7 +31,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-__all__ = ["ALGOS", "RUN_KEYS", "default_file", "load_hyperparams"]
+__all__ = ["ALGOS", "RUN_KEYS", "default_file", "load_hyperparams", "read_toml"]
 
 ALGOS = ("ppo", "sac")
 RUN_KEYS = {
@@ -56,6 +56,21 @@ def default_file(algo: str) -> Path:
     return Path(__file__).parent / "hyperparams" / f"{algo}.toml"
 
 
+def read_toml(path: Path, what: str) -> dict[str, Any]:
+    """The tables of the TOML file at ``path`` (a hyperparameter or search space file).
+
+    Raises:
+        FileNotFoundError: no such file (``no {what} file {path}``).
+        ValueError: malformed TOML, naming the file.
+    """
+    if not path.is_file():
+        raise FileNotFoundError(f"no {what} file {path}")
+    try:
+        return tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as err:
+        raise ValueError(f"{path}: malformed TOML: {err}") from None
+
+
 def algorithm(algo: str) -> Any:
     """The stable-baselines3 class for ``ppo`` or ``sac``."""
     if algo not in ALGOS:
@@ -78,12 +93,7 @@ def load_hyperparams(env_id: str, algo: str, path: str | Path | None = None) -> 
     """
     cls = algorithm(algo)
     path = Path(path) if path is not None else default_file(algo)
-    if not path.is_file():
-        raise FileNotFoundError(f"no hyperparameter file {path}")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"{path}: malformed TOML: {err}") from None
+    data = read_toml(path, "hyperparameter")
     for name, table in data.items():
         if not isinstance(table, dict):
             raise ValueError(f"{path}: top-level key {name!r} must be a table")

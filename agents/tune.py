@@ -35,7 +35,7 @@ from typing import Any
 
 from graspenv import cluster
 
-from .hyperparams import ALGOS, default_file, load_hyperparams
+from .hyperparams import ALGOS, default_file, load_hyperparams, read_toml
 from .loading import check_env_id
 
 __all__ = ["TuneResult", "load_space", "to_toml", "tune"]
@@ -60,12 +60,7 @@ def load_space(path: str | Path) -> tuple[dict[str, Any], dict[str, tuple[str, A
         ValueError: malformed TOML or an unknown distribution, naming the file.
     """
     path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"no search space file {path}")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as err:
-        raise ValueError(f"{path}: {err}") from err
+    data = read_toml(path, "search space")
     unknown = set(data) - {"fixed", "space"}
     if unknown:
         raise ValueError(f"{path}: unknown tables {sorted(unknown)} (expected fixed, space)")

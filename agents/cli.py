@@ -12,15 +12,13 @@ runs. User errors raise ``ValueError`` or
 from __future__ import annotations
 
 import argparse
-import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TypedDict
+
+from graspenv.cli import say, wrote
 
 __all__ = ["add_compare", "add_eval", "add_train", "add_tune"]
-
-
-def _say(line: str) -> None:
-    print(line, file=sys.stderr, flush=True)
 
 
 def _add_ray(p: argparse.ArgumentParser) -> None:
@@ -37,9 +35,40 @@ def _add_ray(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_episodes(p: argparse.ArgumentParser, first_seed: int | None, seed_help: str) -> None:
+    """What eval and compare measure over: ``--episodes`` seeded episodes, the first
+    with seed ``--seed`` (:func:`_check_episodes` checks the count)."""
+    p.add_argument("--episodes", type=int, default=100)
+    p.add_argument("--seed", type=int, default=first_seed, help=seed_help)
+
+
 def _check_episodes(episodes: int) -> None:
     if episodes < 1:
         raise ValueError(f"--episodes must be at least 1, got {episodes}")
+
+
+def _add_baseline(p: argparse.ArgumentParser, seed_help: str) -> None:
+    """What naming a baseline takes: train and tune share it."""
+    p.add_argument("--env", required=True, help="environment id, e.g. graspenv/TurnInPlace-v0")
+    p.add_argument("--algo", required=True, choices=("ppo", "sac"))
+    p.add_argument(
+        "--config", default=None, help="hyperparameter file (default: agents/hyperparams/ALGO.yml)"
+    )
+    p.add_argument("--seed", type=int, default=0, help=seed_help)
+
+
+class Baseline(TypedDict):
+    """The baseline :func:`_add_baseline`'s options name, as train's and tune's
+    keyword arguments."""
+
+    env_id: str
+    algo: str
+    seed: int
+    config: str | None
+
+
+def _baseline(args: argparse.Namespace) -> Baseline:
+    return Baseline(env_id=args.env, algo=args.algo, seed=args.seed, config=args.config)
 
 
 def _train(args: argparse.Namespace) -> int:
@@ -55,28 +84,15 @@ def _train(args: argparse.Namespace) -> int:
     rich.reconfigure(stderr=True)
 
     result = train(
-        args.env,
-        args.algo,
-        seed=args.seed,
-        config=args.config,
+        **_baseline(args),
         out=args.out,
         steps=args.steps,
-        progress=_say,
+        progress=say,
         eval_freq=args.eval_freq,
         eval_episodes=args.eval_episodes,
     )
     print(result.text())
     return 0
-
-
-def _add_baseline(p: argparse.ArgumentParser, seed_help: str) -> None:
-    """What naming a baseline takes: train and tune share it."""
-    p.add_argument("--env", required=True, help="environment id, e.g. graspenv/TurnInPlace-v0")
-    p.add_argument("--algo", required=True, choices=("ppo", "sac"))
-    p.add_argument(
-        "--config", default=None, help="hyperparameter file (default: agents/hyperparams/ALGO.yml)"
-    )
-    p.add_argument("--seed", type=int, default=0, help=seed_help)
 
 
 def add_train(sub: argparse._SubParsersAction) -> None:
@@ -97,7 +113,7 @@ def add_train(sub: argparse._SubParsersAction) -> None:
 def _progress(label: str) -> Callable[[int, int], None]:
     def report(done: int, total: int) -> None:
         if done == total or done % max(total // 10, 1) == 0:
-            _say(f"[{done}/{total}] {label}")
+            say(f"[{done}/{total}] {label}")
 
     return report
 
@@ -129,9 +145,7 @@ def _eval(args: argparse.Namespace) -> int:
         result = evaluate(env_id, agent, seeds, args.config, report, args.video)
     print(summary_table([result.summary()]))
     out = Path(args.out or f"runs/eval/{env_id.split('/')[-1]}-{agent.label.split(' ')[0]}")
-    for path in [*result.write(out), *([Path(args.video)] if args.video else [])]:
-        print(f"wrote {path}")
-    return 0
+    return wrote([*result.write(out), *([Path(args.video)] if args.video else [])])
 
 
 def add_eval(sub: argparse._SubParsersAction) -> None:
@@ -141,8 +155,7 @@ def add_eval(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--env", default=None, help="environment id (default: the agent's own)")
     p.add_argument("--agent", required=True, help="scripted:NAME, random, or a model/run folder")
-    p.add_argument("--episodes", type=int, default=100)
-    p.add_argument("--seed", type=int, default=None, help="first episode seed (default 1000)")
+    _add_episodes(p, None, "first episode seed (default 1000)")
     p.add_argument("--config", default=None, help="environment file (default: built-in)")
     p.add_argument("--out", default=None, help="folder for episodes.csv and summary.json")
     p.add_argument("--video", default=None, help="record the first episode (.mp4 or .gif)")
@@ -160,15 +173,13 @@ def _compare(args: argparse.Namespace) -> int:
         args.episodes,
         args.seed,
         Path(args.out),
-        progress=_say,
+        progress=say,
         workers=args.workers,
         ray=args.ray,
         address=args.address,
     )
     print(result.table)
-    for path in result.files:
-        print(f"wrote {path}")
-    return 0
+    return wrote(result.files)
 
 
 def add_compare(sub: argparse._SubParsersAction) -> None:
@@ -183,8 +194,7 @@ def add_compare(sub: argparse._SubParsersAction) -> None:
         help="agent spec (repeatable; default every scripted strategy, the shipped "
         "learned policies and random)",
     )
-    p.add_argument("--episodes", type=int, default=100)
-    p.add_argument("--seed", type=int, default=1000, help="first episode seed")
+    _add_episodes(p, 1000, "first episode seed")
     p.add_argument("--out", default="runs/compare", help="folder for the table, CSV and chart")
     p.add_argument(
         "--workers",
@@ -200,20 +210,15 @@ def _tune(args: argparse.Namespace) -> int:
     from .tune import tune  # as in _eval: Ray, stable-baselines3 and torch load here
 
     result = tune(
-        args.env,
-        args.algo,
-        args.space,
+        **_baseline(args),
+        space_file=args.space,
         trials=args.trials,
         out=args.out,
-        seed=args.seed,
-        config=args.config,
         address=args.address,
-        say=_say,
+        say=say,
     )
     print(f"best of {result.trials} trials: success {result.best_success:.2f}")
-    for path in result.files:
-        print(f"wrote {path}")
-    return 0
+    return wrote(result.files)
 
 
 def add_tune(sub: argparse._SubParsersAction) -> None:

@@ -55,11 +55,26 @@ def wilson_interval(successes: int, n: int, z: float = 1.96) -> tuple[float, flo
 
 @dataclass(frozen=True)
 class Episode:
+    """What one seeded episode measured (a row of ``episodes.csv``).
+
+    Attributes:
+        seed: the episode's seed.
+        success: the last step's ``info["is_success"]``.
+        episode_return: the sum of the rewards.
+        length: steps.
+        time_to_success: simulated seconds to the first successful step; NaN when
+            never successful.
+        slip: mean object slip over the steps, m/s.
+        grip_force: mean grip force over the steps, newtons.
+        quality: mean grasp quality over the steps (the Ferrari–Canny ε, 0 without
+            force closure).
+    """
+
     seed: int
     success: bool
     episode_return: float
     length: int
-    time_to_success: float  # simulated seconds; NaN when never successful
+    time_to_success: float
     slip: float
     grip_force: float
     quality: float
@@ -67,6 +82,16 @@ class Episode:
 
 @dataclass(frozen=True)
 class Evaluation:
+    """An agent's episodes in one environment.
+
+    Attributes:
+        env_id: the environment id.
+        agent: the agent's label.
+        kind: ``scripted``, ``random``, or the algorithm of a learned policy (``PPO``,
+            ``SAC``).
+        episodes: one per seed, in the order played.
+    """
+
     env_id: str
     agent: str
     kind: str

@@ -4,7 +4,8 @@ Sub-commands live in a table, one function and one line each. Commands from othe
 packages join through the ``graspenv.commands`` entry-point group (an ``add``
 function taking the sub-parser table): that is how the repository's agents
 (``agents/``, installed as ``graspenv_agents``) add ``train``, ``eval`` and
-``compare`` without graspenv importing them.
+``compare`` without graspenv importing them (and print through :func:`say` and
+:func:`wrote`, as the built-in ones do).
 Errors a user can cause end with a one-line message and exit status 2, not a
 traceback.
 """
@@ -13,19 +14,33 @@ from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
 from graspenv import __version__
 from graspenv.config import ConfigError
 
-__all__ = ["main"]
+__all__ = ["main", "say", "wrote"]
 
 
-def _say(line: str) -> None:
+def say(line: str) -> None:
     """A progress line, on stderr so that stdout keeps only the results."""
     print(line, file=sys.stderr, flush=True)
+
+
+def wrote(paths: Iterable[str | Path]) -> int:
+    """Name each file a command wrote (on stdout, after its results); exit status 0."""
+    for path in paths:
+        print(f"wrote {path}")
+    return 0
+
+
+def _add_filters(p: argparse.ArgumentParser, **names: str) -> None:
+    """Repeatable ``--KEY`` options, each picking one of what ``names[KEY]`` names
+    (by default all of them)."""
+    for key, what in names.items():
+        p.add_argument(f"--{key}", action="append", help=f"one {what} (repeatable); default all")
 
 
 def _demo(args: argparse.Namespace) -> int:
@@ -33,9 +48,7 @@ def _demo(args: argparse.Namespace) -> int:
 
     result = run_demo(Path(args.out), config=args.config, frames=args.frames)
     print(result.summary())
-    for path in result.files:
-        print(f"wrote {path}")
-    return 0
+    return wrote(result.files)
 
 
 def _add_demo(sub: argparse._SubParsersAction) -> None:
@@ -71,7 +84,7 @@ def _interactions(args: argparse.Namespace) -> int:
     def progress(label: str) -> None:
         nonlocal done
         done += 1
-        _say(f"[{done}/{total}] {label}")
+        say(f"[{done}/{total}] {label}")
 
     results = run_all(scenarios, args.method, args.config, progress, variants)
     table = markdown_table(results)
@@ -89,8 +102,7 @@ def _add_interactions(sub: argparse._SubParsersAction) -> None:
         "interactions",
         help="measure the paper's interactions for each proxy method (Markdown table)",
     )
-    p.add_argument("--scenario", action="append", help="one scenario (repeatable); default all")
-    p.add_argument("--method", action="append", help="one proxy method (repeatable); default all")
+    _add_filters(p, scenario="scenario", method="proxy method")
     p.add_argument("--config", default=None, help="base scene file (default: built-in)")
     p.add_argument("--out", default=None, help="also write the table to this file")
     p.add_argument(
@@ -105,7 +117,7 @@ def _replay(args: argparse.Namespace) -> int:
     from graspenv.replay import DEFAULT_THRESHOLD, replay
 
     def progress(done: int, total: int | None) -> None:
-        _say(f"[{done}/{total or '?'}] frames")
+        say(f"[{done}/{total or '?'}] frames")
 
     result = replay(
         Path(args.source),
@@ -118,9 +130,7 @@ def _replay(args: argparse.Namespace) -> int:
         threshold=DEFAULT_THRESHOLD if args.threshold is None else args.threshold,
     )
     print(result.text())
-    for path in result.files:
-        print(f"wrote {path}")
-    return 0
+    return wrote(result.files)
 
 
 def _add_replay(sub: argparse._SubParsersAction) -> None:
@@ -142,8 +152,7 @@ def _gallery(args: argparse.Namespace) -> int:
     import graspenv
     from graspenv.envs.gallery import gallery
 
-    print(f"wrote {gallery(graspenv.ENV_IDS, Path(args.out), args.seed)}")
-    return 0
+    return wrote([gallery(graspenv.ENV_IDS, Path(args.out), args.seed)])
 
 
 def _add_gallery(sub: argparse._SubParsersAction) -> None:
@@ -166,11 +175,9 @@ def _bench(args: argparse.Namespace) -> int:
                 f"--runs and --env-steps must be at least 1, got {args.runs} and {args.env_steps}"
             )
 
-        report = run_speed(_say, runs=args.runs, env_steps=args.env_steps)
+        report = run_speed(say, runs=args.runs, env_steps=args.env_steps)
         print(report.markdown())
-        for path in report.write(Path(args.out)):
-            print(f"wrote {path}")
-        return 0
+        return wrote(report.write(Path(args.out)))
     if args.grid or args.noise:
         from graspenv.bench import grid, noise
 
@@ -180,23 +187,21 @@ def _bench(args: argparse.Namespace) -> int:
         else:
             run = grid.run_grid if args.grid else noise.run_noise
             results = run(
-                config=args.config, progress=_say, workers=args.workers, preset=args.preset
+                config=args.config, progress=say, workers=args.workers, preset=args.preset
             )
         print(module.summary(results))
-        for path in module.write_outputs(results, Path(args.out)):
-            print(f"wrote {path}")
-        return 0
+        return wrote(module.write_outputs(results, Path(args.out)))
     if args.fuzz is not None:
         from graspenv.bench.fuzz import run_fuzz
 
-        fuzzed = run_fuzz(args.fuzz, args.seed, args.workers, _say)
+        fuzzed = run_fuzz(args.fuzz, args.seed, args.workers, say)
         print(fuzzed.text())
         print(f"wrote {fuzzed.write(Path(args.out) / 'fuzz.csv')}")
         return 1 if fuzzed.failures else 0
     if args.soak is not None:
         from graspenv.bench.soak import soak
 
-        result = soak(args.soak, args.config, _say)
+        result = soak(args.soak, args.config, say)
         print(result.text())
         print(f"wrote {result.write(Path(args.out) / 'soak.csv')}")
         return 0 if result.flat and result.violations == 0 else 1
@@ -211,16 +216,14 @@ def _bench(args: argparse.Namespace) -> int:
             settings,
             scenarios,
             args.config,
-            _say,
+            say,
             placements,
             replays,
             ray=args.ray,
             address=args.address,
         )
     print(markdown_table(results))
-    for path in write_outputs(results, Path(args.out)):
-        print(f"wrote {path}")
-    return 0
+    return wrote(write_outputs(results, Path(args.out)))
 
 
 def _add_bench(sub: argparse._SubParsersAction) -> None:
@@ -229,8 +232,7 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
         help="speed against error: scenarios × settings, CSV, Markdown table and Pareto plot",
     )
     p.add_argument("--quick", action="store_true", help="a subset that runs in under 2 minutes")
-    p.add_argument("--setting", action="append", help="one setting (repeatable); default all")
-    p.add_argument("--scenario", action="append", help="one scenario (repeatable); default all")
+    _add_filters(p, setting="setting", scenario="scenario")
     p.add_argument(
         "--placements",
         type=int,
@@ -312,7 +314,7 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
 def _serve(args: argparse.Namespace) -> int:
     from graspenv.live.cli import run_serve
 
-    return run_serve(args, _say)
+    return run_serve(args, say)
 
 
 def _add_serve(sub: argparse._SubParsersAction) -> None:

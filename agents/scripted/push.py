@@ -8,13 +8,14 @@ wanted displacement divided by :data:`STEP`.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from .base import ScriptedAgent, State
 
-__all__ = ["PushFromBehind", "RubFromTop"]
+__all__ = ["GoalSpeed", "PushFromBehind", "RubFromTop"]
 
 #: Finger travel per step at action 1, metres (0.2 m/s over two 60 Hz frames).
 STEP = 0.2 / 30.0
@@ -40,6 +41,20 @@ def _toward(
     return move * (limit / norm) if norm > limit else move
 
 
+@dataclass(frozen=True)
+class GoalSpeed:
+    """How fast (action units) a strategy moves its object towards the goal: ``gain``
+    times the distance left (metres), within [``min_speed``, ``max_speed``], so it
+    slows as the object nears the goal but never stalls."""
+
+    gain: float
+    min_speed: float
+    max_speed: float
+
+    def at(self, distance: float) -> float:
+        return float(np.clip(self.gain * distance, self.min_speed, self.max_speed))
+
+
 class PushFromBehind(ScriptedAgent):
     """SidePush: strike the box from the far side of the goal and push it there.
 
@@ -54,9 +69,7 @@ class PushFromBehind(ScriptedAgent):
     name = "push-from-behind"
     standoff = 0.058
     spread = 0.011
-    push_speed = 0.6
-    min_speed = 0.12
-    gain = 12.0
+    push_speed = GoalSpeed(gain=12.0, min_speed=0.12, max_speed=0.6)
     lateral_gain = 0.5
     stop_distance = 0.006
     realign = 0.02
@@ -94,7 +107,7 @@ class PushFromBehind(ScriptedAgent):
             lateral = float(np.dot(centre - box, across))
             if abs(lateral) > self.realign or float(np.dot(box - centre, forward)) < 0.0:
                 self.phase = "approach"
-            speed = float(np.clip(self.gain * distance, self.min_speed, self.push_speed))
+            speed = self.push_speed.at(distance)
             for i, finger in enumerate(fingers):
                 side = float(np.dot(finger - box, across)) - offsets[i]
                 correction = -self.lateral_gain * side / STEP
@@ -126,9 +139,7 @@ class RubFromTop(ScriptedAgent):
     detour = 0.04
     detour_band = math.radians(8.0)
     yaw_band = math.radians(4.0)
-    speed = 0.5
-    min_speed = 0.1
-    gain = 10.0
+    speed = GoalSpeed(gain=10.0, min_speed=0.1, max_speed=0.5)
     replace = 0.012
     placed = 0.002
 
@@ -169,8 +180,5 @@ class RubFromTop(ScriptedAgent):
             if miss < self.placed:
                 self.touching = True
             return np.array([*velocity, -1.0])
-        if abs(yaw_error) > self.yaw_band:
-            speed = self.speed
-        else:
-            speed = float(np.clip(self.gain * distance, self.min_speed, self.speed))
+        speed = self.speed.max_speed if abs(yaw_error) > self.yaw_band else self.speed.at(distance)
         return np.array([*(speed * self.heading), 1.0])

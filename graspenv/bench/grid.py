@@ -238,10 +238,7 @@ class CellResult:
         return abs(self.slide_error_pct) <= SLIDE_TARGET_PCT
 
     def row(self) -> dict[str, Any]:
-        row: dict[str, Any] = {"map": self.map, **cell_row(self.cell)}
-        for f in fields(self):
-            if f.name not in ("cell", "map"):
-                row[f.name] = getattr(self, f.name)
+        row = run_row(self, "map")
         row["turn_counted"] = self.turn_counted
         row["slide_counted"] = self.slide_counted
         return row
@@ -251,6 +248,17 @@ def cell_row(cell: Cell) -> dict[str, Any]:
     """A cell as CSV columns: its fields, the position as ``x`` and ``y``."""
     row = asdict(cell)
     row["x"], row["y"] = row.pop("position")
+    return row
+
+
+def run_row(run: Any, *first: str) -> dict[str, Any]:
+    """A dataclass that measured one cell (field ``cell``), as CSV columns: the fields
+    named in ``first``, the cell's columns (:func:`cell_row`), then its other fields
+    in order."""
+    row: dict[str, Any] = {name: getattr(run, name) for name in first}
+    row.update(cell_row(run.cell))
+    skip = (*first, "cell")
+    row.update({f.name: getattr(run, f.name) for f in fields(run) if f.name not in skip})
     return row
 
 

@@ -37,9 +37,9 @@ from graspenv.bench.grid import (
     Cell,
     base_scene,
     cell_from_row,
-    cell_row,
     grasp_run,
     placed,
+    run_row,
 )
 from graspenv.bench.jobs import collect_jobs
 from graspenv.bench.results import pipe_table, write_rows
@@ -121,15 +121,7 @@ class NoiseRun:
         )
 
     def row(self) -> dict[str, object]:
-        return {
-            "level": self.level,
-            "cleanup": self.cleanup,
-            **cell_row(self.cell),
-            "seed": self.seed,
-            "turn_error_deg": self.turn_error_deg,
-            "slide_error_pct": self.slide_error_pct,
-            "dropped": self.dropped,
-        }
+        return {**run_row(self, "level", "cleanup"), "dropped": self.dropped}
 
 
 #: One run: noise level, clean-up, object, seed, scene file (None: the built-in

@@ -25,7 +25,7 @@ import math
 import threading
 import time
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -81,17 +81,12 @@ class LiveState:
     touched_at: float
 
     def json(self) -> dict[str, Any]:
+        """The fields by name, the timings and forces rounded for the page."""
         return {
-            "frame": self.frame,
-            "objects": self.objects,
-            "contacts": self.contacts,
-            "touches": self.touches,
-            "dropped": self.dropped,
+            **asdict(self),
             "fps": round(self.fps, 2),
             "frame_ms": round(self.frame_ms, 3),
             "grip_force": {k: round(v, 4) for k, v in self.grip_force.items()},
-            "success": self.success,
-            "touched_at": self.touched_at,
         }
 
 

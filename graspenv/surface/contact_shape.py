@@ -65,12 +65,10 @@ class ContactShape(ABC):
     """
 
     def __init__(
-        self,
-        centre: ArrayLike = (0.0, 0.0),
-        angle: float = 0.0,
-        linear_velocity: ArrayLike = (0.0, 0.0),
-        angular_velocity: float = 0.0,
+        self, centre: ArrayLike, angle: float, linear_velocity: ArrayLike, angular_velocity: float
     ) -> None:
+        # No defaults here: each concrete shape's signature has its own (and its
+        # own order of arguments), and always passes all four.
         self._centre = _checks.vector2(centre, "centre")
         self._angle = _checks.finite(angle, "angle")
         self._pivot = self._centre.copy()

@@ -132,13 +132,11 @@ class HandEdge(_RoundedBox):
     semicircular ends).
 
     Args:
-        centre: metres, world frame, shape (2,).
+        centre, linear_velocity, angular_velocity: as for :class:`Palm`.
         angle: radians, from the world x axis to the local x (across-edge) axis; the
             length runs along local y.
         length: end to end, metres.
         width: metres, less than or equal to ``length``.
-        linear_velocity: velocity of the centre, m/s, world frame, shape (2,).
-        angular_velocity: rad/s.
     """
 
     def __init__(

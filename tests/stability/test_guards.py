@@ -21,6 +21,19 @@ import pytest
 from . import _cases as cases
 from ._cases import Case
 
+
+def _off(guard: str, value: Any, build: Callable[[], Case], broken: str, **section: Any) -> Any:
+    """A parameter set: the case ``build`` makes, the guard ``guard`` (``section.key``,
+    also the test id) set to ``value`` with ``section``'s other keys as given, and the
+    invariant that then breaks."""
+    name, key = guard.split(".")
+    return pytest.param(build, {name: {key: value, **section}}, {broken}, id=guard)
+
+
+def _strike_at_four_substeps() -> Case:
+    return cases.strike(1.0).with_sections(physics={"max_substeps": 4})
+
+
 GUARDS = [
     # CCD guards the frames whose sub-steps are at their cap (physics.max_substeps):
     # at a fixed four sub-steps a particle following a 1 m/s finger, without CCD,
@@ -28,52 +41,33 @@ GUARDS = [
     # start is no support), through the table: 11.7 mm below it. With the sub-steps
     # raised to the motion (16 at 1 m/s: a millimetre each) it holds without CCD,
     # and so do strikes at 2 and 5 m/s; no case built so far needs CCD then.
-    pytest.param(
-        lambda: cases.strike(1.0).with_sections(physics={"max_substeps": 4}),
-        {"physics": {"ccd": False, "max_substeps": 4}},
-        {"below_table"},
-        id="physics.ccd",
-    ),
+    _off("physics.ccd", False, _strike_at_four_substeps, "below_table", max_substeps=4),
     # CCD at Bullet's own allowed penetration (4 cm) is no better than none.
-    pytest.param(
-        lambda: cases.strike(1.0).with_sections(physics={"max_substeps": 4}),
-        {"physics": {"allowed_ccd_penetration": 0.04, "max_substeps": 4}},
-        {"below_table"},
-        id="physics.allowed_ccd_penetration",
+    _off(
+        "physics.allowed_ccd_penetration",
+        0.04,
+        _strike_at_four_substeps,
+        "below_table",
+        max_substeps=4,
     ),
     # A 20 mm squeeze held on the sides instead of the top springs the box away
     # when one finger lifts.
-    pytest.param(
-        cases.deep_release,
-        {"proxy": {"penetration_limit": False}},
-        {"speed"},
-        id="proxy.penetration_limit",
-    ),
-    pytest.param(
-        cases.deep_release,
-        {"proxy": {"penetration_margin": 0.03}},
-        {"speed"},
-        id="proxy.penetration_margin",
-    ),
+    _off("proxy.penetration_limit", False, cases.deep_release, "speed"),
+    _off("proxy.penetration_margin", 0.03, cases.deep_release, "speed"),
     # Particles of a fixed 20 g squeezing a 5 g box 3 mm outweigh it fourfold: in
     # the first frame of the turn a particle is 1.04 mm inside it (the box at
     # 0.85 m/s; at a fixed four sub-steps it jumps out of the grip, 2.4 mm and
     # 1.7 m/s against a bound of 1.3 m/s). With 0.5 g particles (a tenth of its
     # mass) it is held like the 0.2 kg box.
-    pytest.param(
+    _off(
+        "proxy.mass_ratio",
+        0.0,
         lambda: cases.pinch_box("pinch 5 g", cases.box(mass=0.005)),
-        {"proxy": {"mass_ratio": 0.0}},
-        {"inside_object"},
-        id="proxy.mass_ratio",
+        "inside_object",
     ),
     # Under a stiff control law a 2 mm squeeze asks 37 N of each particle; without
     # the clamp they push into the 20 g box (and throw it about).
-    pytest.param(
-        cases.stiff_pinch,
-        {"physics": {"max_particle_force": 1.0e6}},
-        {"inside_object"},
-        id="physics.max_particle_force",
-    ),
+    _off("physics.max_particle_force", 1.0e6, cases.stiff_pinch, "inside_object"),
 ]
 
 

@@ -49,7 +49,7 @@ from graspenv.plots import line_chart
 from .hyperparams import algorithm, default_file, load_hyperparams
 from .loading import check_env_id
 
-__all__ = ["TrainResult", "train", "zoo_arguments"]
+__all__ = ["TrainResult", "run_zoo", "train"]
 
 #: What training needs beyond stable-baselines3 (the training extra): the zoo, and
 #: what SB3 imports only once asked for TensorBoard logs and the progress bar.
@@ -105,45 +105,6 @@ def git_commit(where: Path) -> str | None:
     return out.stdout.strip() + ("+uncommitted" if dirty.stdout.strip() else "")
 
 
-def zoo_arguments(
-    env_id: str,
-    algo: str,
-    seed: int,
-    config: Path,
-    out: Path,
-    steps: int | None = None,
-    eval_freq: int = 5_000,
-    eval_episodes: int = 10,
-    save_freq: int = 25_000,
-    progress_bar: bool = True,
-    n_envs: int = 1,
-) -> list[str]:
-    """The arguments of ``python -m rl_zoo3.train`` for one run: the file's entry,
-    one torch thread (the cores go to the environments), subprocess environments
-    when there are several, periodic deterministic evaluation (``-1``: none)."""
-    argv = [
-        "--algo", algo,
-        "--env", env_id,
-        "--gym-packages", "graspenv",
-        "--conf-file", str(config),
-        "--seed", str(seed),
-        "--log-folder", str(out),
-        "--tensorboard-log", str(out / "tb"),
-        "--num-threads", "1",
-        "--eval-freq", str(eval_freq),
-        "--eval-episodes", str(eval_episodes),
-        "--save-freq", str(save_freq),
-        "--verbose", "0",
-    ]  # fmt: skip
-    if n_envs > 1:
-        argv += ["--vec-env", "subproc"]
-    if steps is not None:
-        argv += ["--n-timesteps", str(steps)]
-    if progress_bar:
-        argv.append("--progress")
-    return argv
-
-
 def run_zoo(argv: Sequence[str]) -> None:
     """``python -m rl_zoo3.train ARGV`` in this process (the zoo reads ``sys.argv``)."""
     from rl_zoo3.train import train as zoo_train
@@ -194,19 +155,28 @@ def train(
     if steps is not None and steps < 1:
         raise ValueError(f"steps must be positive, got {steps}")
     out = Path(out)
-    argv = zoo_arguments(
-        env_id,
-        algo,
-        seed,
-        path,
-        out,
-        steps,
-        eval_freq,
-        eval_episodes,
-        save_freq,
-        progress_bar,
-        int(settings.get("n_envs", 1)),
-    )
+    # The zoo's own arguments: the file's entry, one torch thread (the cores go to
+    # the environments), subprocess environments when there are several.
+    argv = [
+        "--algo", algo,
+        "--env", env_id,
+        "--gym-packages", "graspenv",
+        "--conf-file", str(path),
+        "--seed", str(seed),
+        "--log-folder", str(out),
+        "--tensorboard-log", str(out / "tb"),
+        "--num-threads", "1",
+        "--eval-freq", str(eval_freq),
+        "--eval-episodes", str(eval_episodes),
+        "--save-freq", str(save_freq),
+        "--verbose", "0",
+    ]  # fmt: skip
+    if int(settings.get("n_envs", 1)) > 1:
+        argv += ["--vec-env", "subproc"]
+    if steps is not None:
+        argv += ["--n-timesteps", str(steps)]
+    if progress_bar:
+        argv.append("--progress")
     say = progress or _stderr
     say("python -m rl_zoo3.train " + shlex.join(argv))
     runs, logs = out / algo, out / "tb" / env_id.replace("/", "-")

@@ -17,10 +17,18 @@ named in a file's ``callback`` list with its keyword arguments::
 Before the first training step it plays that many episodes of the strategy in the
 training environments themselves (so with the file's wrapper and arguments), adds
 every transition to the replay buffer, and resets the environments to where
-training would have started. With ``behaviour_cloning: N`` it then fits the actor's
-deterministic action to the strategy's on those transitions for N gradient steps,
-so that training starts from a policy that already does roughly what the
-strategy does.
+training would have started. Two optional head starts follow, on those
+transitions alone:
+
+- ``behaviour_cloning: N``: N gradient steps of maximum likelihood of the
+  demonstrated actions under the actor's own (squashed Gaussian) distribution, so
+  that training starts from a policy that does what the strategy does, its spread
+  included;
+- ``critic_warmup: N``: then N steps of SAC's own critic update with the actor held
+  fixed, so that the actor's first updates follow a critic that has seen the
+  demonstrations' returns rather than a random one (a cloned actor following a
+  random critic unlearns its cloning: on SqueezeHold a least-squares cloning alone
+  held 20 of 20 episodes, and 2 000 steps of SAC after it 1 of 10).
 """
 
 from __future__ import annotations
@@ -53,18 +61,21 @@ class ScriptedDemonstrations(BaseCallback):
         episodes: int = 50,
         seed: int = 20_000,
         behaviour_cloning: int = 0,
+        critic_warmup: int = 0,
         verbose: int = 1,
     ) -> None:
         super().__init__(verbose)
         if episodes < 1:
             raise ValueError(f"ScriptedDemonstrations: episodes must be >= 1, got {episodes}")
-        if behaviour_cloning < 0:
-            raise ValueError(
-                f"ScriptedDemonstrations: behaviour_cloning must be >= 0, got {behaviour_cloning}"
-            )
+        for key, value in (
+            ("behaviour_cloning", behaviour_cloning),
+            ("critic_warmup", critic_warmup),
+        ):
+            if value < 0:
+                raise ValueError(f"ScriptedDemonstrations: {key} must be >= 0, got {value}")
         self.spec = load_agent(f"scripted:{strategy}")
         self.strategy, self.episodes, self.first_seed = strategy, episodes, seed
-        self.behaviour_cloning = behaviour_cloning
+        self.behaviour_cloning, self.critic_warmup = behaviour_cloning, critic_warmup
         self.transitions = self.successes = 0
 
     def _on_training_start(self) -> None:
@@ -109,6 +120,8 @@ class ScriptedDemonstrations(BaseCallback):
         self.logger.record("demonstrations/successes", self.successes)
         if self.behaviour_cloning:
             self.logger.record("demonstrations/cloning_loss", self._clone(model))
+        if self.critic_warmup:
+            self.logger.record("demonstrations/critic_loss", self._warm_critic(model))
         if self.verbose:
             print(
                 f"replay buffer filled with {done_episodes} episodes of {self.strategy} "
@@ -117,8 +130,8 @@ class ScriptedDemonstrations(BaseCallback):
             )
 
     def _clone(self, model: Any) -> float:
-        """Fit the actor's deterministic action to the demonstrated one (mean
-        squared error, the actor's own optimiser); the last batch's loss."""
+        """Maximise the log-likelihood of the demonstrated actions under the actor
+        (its own optimiser); the last batch's negative log-likelihood."""
         import torch
 
         actor = model.actor
@@ -126,13 +139,49 @@ class ScriptedDemonstrations(BaseCallback):
         actor.set_training_mode(True)
         for _ in range(self.behaviour_cloning):
             batch = model.replay_buffer.sample(model.batch_size)
-            loss = torch.nn.functional.mse_loss(
-                actor(batch.observations, deterministic=True), batch.actions
-            )
+            mean, log_std, _ = actor.get_action_dist_params(batch.observations)
+            distribution = actor.action_dist.proba_distribution(mean, log_std)
+            # Saturated actions (the strategies clip to ±1) would put atanh at
+            # infinity: keep them just inside.
+            target = batch.actions.clamp(-0.999, 0.999)
+            loss = -distribution.log_prob(target).mean()
             actor.optimizer.zero_grad()
             loss.backward()
             actor.optimizer.step()
         actor.set_training_mode(False)
+        return float(loss)
+
+    def _warm_critic(self, model: Any) -> float:
+        """SAC's critic update (as ``SAC.train``) with the actor and the entropy
+        coefficient fixed; the last batch's loss."""
+        import torch
+        from stable_baselines3.common.utils import polyak_update
+
+        critic, target_critic = model.critic, model.critic_target
+        if model.log_ent_coef is not None:
+            ent_coef = torch.exp(model.log_ent_coef.detach())
+        else:
+            ent_coef = model.ent_coef_tensor
+        loss = torch.zeros(())
+        critic.set_training_mode(True)
+        for _ in range(self.critic_warmup):
+            batch = model.replay_buffer.sample(model.batch_size)
+            with torch.no_grad():
+                next_actions, next_log_prob = model.actor.action_log_prob(batch.next_observations)
+                next_q = torch.cat(target_critic(batch.next_observations, next_actions), dim=1)
+                next_q = torch.min(next_q, dim=1, keepdim=True)[0]
+                next_q = next_q - ent_coef * next_log_prob.reshape(-1, 1)
+                target = batch.rewards + (1 - batch.dones) * model.gamma * next_q
+            current = critic(batch.observations, batch.actions)
+            loss = (
+                0.5 * torch.stack([torch.nn.functional.mse_loss(q, target) for q in current]).sum()
+            )
+            critic.optimizer.zero_grad()
+            loss.backward()
+            critic.optimizer.step()
+            polyak_update(critic.parameters(), target_critic.parameters(), model.tau)
+            polyak_update(model.batch_norm_stats, model.batch_norm_stats_target, 1.0)
+        critic.set_training_mode(False)
         return float(loss)
 
     def _on_step(self) -> bool:

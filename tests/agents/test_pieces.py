@@ -53,6 +53,8 @@ def test_scripted_demonstrations_need_a_replay_buffer_and_plain_observations() -
         ScriptedDemonstrations("pinch-and-turn", episodes=0)
     with pytest.raises(ValueError, match="behaviour_cloning"):
         ScriptedDemonstrations("pinch-and-turn", behaviour_cloning=-1)
+    with pytest.raises(ValueError, match="critic_warmup"):
+        ScriptedDemonstrations("pinch-and-turn", critic_warmup=-1)
     with pytest.raises(ValueError, match="unknown scripted strategy"):
         ScriptedDemonstrations("juggle")
 

@@ -143,7 +143,7 @@ def write(
 
 def chart_png(summaries: Sequence[dict[str, Any]], path: Path, episodes: int) -> Path:
     """Success (with 95 % whiskers) and grasp quality, one bar per kind of agent
-    (scripted, each learned algorithm, random) in each task; where one kind has
+    (scripted, each learned algorithm, random, still) in each task; where one kind has
     several agents on a task, the best by success is shown."""
     tasks = sorted({s["env_id"] for s in summaries})
     kinds = list(dict.fromkeys(s["kind"] for s in summaries))

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 from stable_baselines3.common.callbacks import BaseCallback
 
@@ -90,8 +91,14 @@ class ScriptedDemonstrations(BaseCallback):
         env = self.training_env
         # The strategies read the state vector through the environment's named
         # slices; a wrapper appending values (RelativeGoal) leaves them in place.
-        layout_env = env.get_attr("unwrapped", [0])[0]
-        agents = [self.spec.build(layout_env) for _ in range(env.num_envs)]
+        # Built on an environment of the same spec (its layout and action mode),
+        # which works for subprocess environments too.
+        spec = env.get_attr("spec", [0])[0]
+        layout_env = gym.make(spec.id, **spec.kwargs)
+        try:
+            agents = [self.spec.build(layout_env) for _ in range(env.num_envs)]
+        finally:
+            layout_env.close()
         # Environment i starts from seed + i; its later episodes continue its stream.
         env.seed(self.first_seed)
         obs: Any = env.reset()  # state observations: an array, one row per environment

@@ -65,7 +65,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.contacts.resample import bounds_of, gather
+from graspenv.contacts.resample import gather
+from graspenv.geometry import bounds_of
 from graspenv.jit import njit
 
 __all__ = [

@@ -67,7 +67,7 @@ from numpy.typing import NDArray
 from graspenv.config import ContactConfig
 from graspenv.contacts.extract import components, traced_chains, validate_mask
 from graspenv.contacts.resample import gather, orient_ccw_kernel, resample_kernel
-from graspenv.geometry import reach_from
+from graspenv.geometry import Polylines, reach_from
 from graspenv.jit import njit
 from graspenv.surface.geometry import Surface
 
@@ -418,7 +418,7 @@ def _track_frame(
             next_id += 1
             if parent[c] >= 0:
                 origins[c] = prev_ids[parent[c]]
-    contours, contour_bounds = resample_kernel(outlines, bounds, spacing, starts)
+    contours, contour_bounds = resample_kernel(Polylines(outlines, bounds), spacing, starts)
     order = np.argsort(ids, kind="mergesort")
     rank = np.empty(count, np.intp)
     rank[order] = np.arange(count)
@@ -488,8 +488,8 @@ def _match(
     parent = np.full(n_cur, -1, np.intp)
     if n_prev == 0 or n_cur == 0:
         return keep, merged, parent
-    prev_reach = reach_from(prev_centroids, before.outlines, before.bounds)
-    reach = reach_from(centroids, now.outlines, now.bounds)
+    prev_reach = reach_from(prev_centroids, Polylines(before.outlines, before.bounds))
+    reach = reach_from(centroids, Polylines(now.outlines, now.bounds))
     by_x = np.argsort(centroids[:, 0], kind="mergesort")
     xs = centroids[by_x, 0]
     taken = np.zeros(n_prev, np.bool_)

@@ -50,9 +50,9 @@ from numpy.typing import NDArray
 
 from graspenv.config import ProxyConfig
 from graspenv.contacts.matching import correspond_batch
-from graspenv.contacts.resample import bounds_of, gather, gather_rows, resample_kernel
+from graspenv.contacts.resample import gather, gather_rows, resample_kernel
 from graspenv.contacts.tracking import ContactFrame
-from graspenv.geometry import reach_from
+from graspenv.geometry import Polylines, bounds_of, reach_from
 from graspenv.jit import njit
 from graspenv.physics.world import PhysicsWorld
 from graspenv.proxies.base import ProxyCommand, rotation_kernel
@@ -459,12 +459,12 @@ def _plan_follow(
     if predicted_resampling:
         chosen, chosen_bounds = gather(outlines, outline_bounds, contacts)
         starts = predicted[previous_bounds[:-1]]
-        current, current_bounds = resample_kernel(chosen, chosen_bounds, spacing, starts)
+        current, current_bounds = resample_kernel(Polylines(chosen, chosen_bounds), spacing, starts)
     else:
         current, current_bounds = gather(contours, contour_bounds, contacts)
     # The farthest any point of a contact moved: its centroid's step plus the turn's
     # arc at its farthest point.
-    reach = reach_from(after, current, current_bounds)
+    reach = reach_from(after, Polylines(current, current_bounds))
     travel = np.empty(len(contacts))
     for k in range(len(contacts)):
         step = np.hypot(after[k, 0] - before[k, 0], after[k, 1] - before[k, 1])

@@ -390,12 +390,11 @@ def _track_frame(
     keeps or split off, or -1); and over the previous contacts: the index here of the
     contact each merged into without keeping its id (or -1), and which are removed.
     """
-    _, _, px_outlines, bounds, areas, px_centroids = components(
-        chains, chain_bounds, width, min_area
-    )
+    found = components(chains, chain_bounds, width, min_area)
+    areas, bounds = found.areas, found.outlines.bounds
     count = len(areas)
-    outlines, _ = orient_ccw_kernel(_to_world(px_outlines, transform), bounds)
-    centroids = _to_world(px_centroids, transform)
+    outlines, _ = orient_ccw_kernel(_to_world(found.outlines.points, transform), bounds)
+    centroids = _to_world(found.centroids, transform)
     keep, merged, parent = _match(
         _Contacts(prev_centroids, prev_outlines, prev_outline_bounds), prev_ids,
         _Contacts(centroids, outlines, bounds), radius,

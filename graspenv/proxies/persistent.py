@@ -159,10 +159,10 @@ class PersistentProxies:
         proxy, layers, before = self._proxy, self._layers, self._tracks
         if len(before.ids) == 0 and len(frame) == 0:  # nothing on the table
             return ProxyCommand(np.zeros((0, layers), np.int64), np.zeros((0, 2)), np.zeros(0))
+        now = frame.contact_set
         plan = _plan_follow(
             before.ids, before.bounds, before.points, before.centroids,
-            frame.contact_ids, frame.is_new, frame.centroids, frame.outlines,
-            frame.outline_bounds, frame.contours, frame.contour_bounds,
+            now.ids, now.is_new, now.centroids, *now.outlines, *now.contours,
             proxy.track_hand_rotation, proxy.predicted_resampling, self._spacing,
         )  # fmt: skip
         # Every track no contact continues gives its particles back: lift-offs,
@@ -280,8 +280,8 @@ class PersistentProxies:
         if followed.ids.size == 0:
             return _Tracks(
                 frame.contact_ids[new], bounds, points, particles,
-                frame.centroids[new].copy(), np.zeros(new.size), born,
-                frame.centroids[new].copy(), np.full((new.size, 2), np.nan),
+                frame.contact_set.centroids[new].copy(), np.zeros(new.size), born,
+                frame.contact_set.centroids[new].copy(), np.full((new.size, 2), np.nan),
             )  # fmt: skip
         # Both kinds together, then in the frame's (ascending id) order.
         both_bounds = bounds_of(np.concatenate([np.diff(followed.bounds), np.diff(bounds)]))
@@ -292,10 +292,10 @@ class PersistentProxies:
             tracks_bounds,
             np.concatenate([followed.points, points])[rows],
             np.concatenate([followed.particles, particles])[rows],
-            frame.centroids.copy(),
+            frame.contact_set.centroids.copy(),
             np.concatenate([followed.travel, np.zeros(new.size)])[order],
             np.concatenate([followed.born, born])[rows],
-            np.concatenate([followed.smoothed, frame.centroids[new]])[order],
+            np.concatenate([followed.smoothed, frame.contact_set.centroids[new]])[order],
             np.concatenate([followed.drift, np.full((new.size, 2), np.nan)])[order],
         )
 

@@ -1,9 +1,12 @@
-"""Geometry shared by every stage: frames, yaw and tilt, object extents and footprints."""
+"""Geometry shared by every stage: frames, yaw and tilt, object extents and footprints,
+and point sets laid end to end."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from itertools import accumulate
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -13,7 +16,9 @@ from graspenv.jit import njit
 
 __all__ = [
     "SHAPE_CODES",
+    "Polylines",
     "bounding_radius",
+    "bounds_of",
     "convex_hull",
     "footprint",
     "footprint_depths",
@@ -115,23 +120,55 @@ def tilt_angle(quaternion: Sequence[float] | NDArray[np.float64]) -> float:
     return math.atan2(math.hypot(axis_x, axis_y), axis_z)
 
 
+class Polylines(NamedTuple):
+    """Several point sets laid end to end (contours, outlines, a contact's points):
+    set c is ``points[bounds[c]:bounds[c + 1]]``. The compiled stages take and return
+    them as one argument.
+
+    Attributes:
+        points: the sets one after another, shape (T, 2), in the frame they are
+            given in (metres, world frame, for contacts).
+        bounds: where each set starts, and the total (:func:`bounds_of`), (C + 1,).
+    """
+
+    points: NDArray[np.float64]
+    bounds: NDArray[np.intp]
+
+
+def bounds_of(sizes: Sequence[int] | NDArray[np.intp]) -> NDArray[np.intp]:
+    """Where each of several arrays laid end to end starts, and the total.
+
+    The batch functions of :mod:`graspenv.contacts` take every contour of a frame as
+    one array and these bounds (:class:`Polylines`): contour c is
+    ``points[bounds[c]:bounds[c + 1]]``.
+
+    Args:
+        sizes: the arrays' lengths, (C,).
+
+    Returns:
+        Shape (C + 1,): 0, then the running totals.
+    """
+    bounds = np.zeros(len(sizes) + 1, dtype=np.intp)
+    # A running sum in Python: a frame has a few contacts, and numpy's cumsum costs
+    # more than the sum itself at that size.
+    bounds[1:] = list(accumulate(sizes))
+    return bounds
+
+
 @njit
-def reach_from(
-    centres: NDArray[np.float64], points: NDArray[np.float64], bounds: NDArray[np.intp]
-) -> NDArray[np.float64]:
-    """How far each of several point sets laid end to end reaches from its centre
-    (the radius of the smallest disc about the centre that holds the set).
+def reach_from(centres: NDArray[np.float64], sets: Polylines) -> NDArray[np.float64]:
+    """How far each of several point sets reaches from its centre (the radius of the
+    smallest disc about the centre that holds the set).
 
     Args:
         centres: one point per set, shape (C, 2).
-        points: the sets one after another, same frame, shape (T, 2); set c is
-            ``points[bounds[c]:bounds[c + 1]]``.
-        bounds: shape (C + 1,).
+        sets: the point sets, same frame.
 
     Returns:
         Each set's largest distance from its centre, same unit, shape (C,); 0 for
         an empty set.
     """
+    points, bounds = sets
     reach = np.zeros(len(centres))
     for c in range(len(centres)):
         for i in range(bounds[c], bounds[c + 1]):

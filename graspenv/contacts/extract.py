@@ -60,12 +60,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from graspenv.contacts.resample import bounds_of, gather
+from graspenv.contacts.resample import gather
+from graspenv.geometry import Polylines, bounds_of
 from graspenv.jit import njit
 
 __all__ = [
@@ -165,20 +167,20 @@ def find_components_batch(
         ``outline`` is a view; component i's is ``outlines[bounds[i]:bounds[i + 1]]``.
     """
     found = find_outlines(mask, min_area)
+    outlines, bounds = found.outlines
     components = [
         Component(
             found.chains[found.chain_bounds[i] : found.chain_bounds[i + 1]],
-            found.outlines[found.bounds[i] : found.bounds[i + 1]],
+            outlines[bounds[i] : bounds[i + 1]],
             float(found.areas[i]),
             found.centroids[i],
         )
         for i in range(len(found.areas))
     ]
-    return components, found.outlines, found.bounds
+    return components, outlines, bounds
 
 
-@dataclass(frozen=True, eq=False)
-class Outlines:
+class Outlines(NamedTuple):
     """Every component of a mask as arrays, in raster order of their first pixel (the
     per-frame form of :func:`find_components`: no object per component).
 
@@ -187,17 +189,14 @@ class Outlines:
             int32, shape (K, 2); component i's is ``chains[chain_bounds[i]:
             chain_bounds[i + 1]]``.
         chain_bounds: shape (C + 1,).
-        outlines: the outlines one after another, pixels (column, row), shape (L, 2).
-        bounds: shape (C + 1,): component i's outline is ``outlines[bounds[i]:
-            bounds[i + 1]]``.
+        outlines: the outlines, pixels (column, row), one set per component.
         areas: pixels inside each outer boundary, shape (C,).
         centroids: pixels (column, row), shape (C, 2).
     """
 
     chains: NDArray[np.int32]
     chain_bounds: NDArray[np.intp]
-    outlines: NDArray[np.float64]
-    bounds: NDArray[np.intp]
+    outlines: Polylines
     areas: NDArray[np.float64]
     centroids: NDArray[np.float64]
 
@@ -211,7 +210,7 @@ def find_outlines(mask: NDArray[np.uint8], min_area: float = 0.0) -> Outlines:
         min_area: components with fewer pixels than this are dropped.
     """
     chains, chain_bounds = traced_chains(mask)
-    return Outlines(*components(chains, chain_bounds, mask.shape[1], float(min_area)))
+    return components(chains, chain_bounds, mask.shape[1], float(min_area))
 
 
 def traced_chains(mask: NDArray[np.uint8]) -> tuple[NDArray[np.int32], NDArray[np.intp]]:
@@ -231,23 +230,18 @@ def traced_chains(mask: NDArray[np.uint8]) -> tuple[NDArray[np.int32], NDArray[n
 @njit
 def components(
     all_chains: NDArray[np.int32], all_bounds: NDArray[np.intp], width: int, min_area: float
-) -> tuple[
-    NDArray[np.int32],
-    NDArray[np.intp],
-    NDArray[np.float64],
-    NDArray[np.intp],
-    NDArray[np.float64],
-    NDArray[np.float64],
-]:
-    """The fields of :class:`Outlines` from traced chains (:func:`traced_chains`):
-    areas and centroids, the components of at least ``min_area`` pixels in raster
-    order of their first pixel, and their outlines."""
+) -> Outlines:
+    """:class:`Outlines` from traced chains (:func:`traced_chains`): areas and
+    centroids, the components of at least ``min_area`` pixels in raster order of their
+    first pixel, and their outlines."""
     areas, centroids, keys = _measure_chains(all_chains, all_bounds, width)
     kept = np.flatnonzero(areas >= min_area)
     order = kept[np.argsort(keys[kept], kind="mergesort")]
     chains, chain_bounds = gather(all_chains, all_bounds, order)
     outlines, bounds = _outlines(chains.astype(np.float64), chain_bounds)
-    return chains, chain_bounds, outlines, bounds, areas[order], centroids[order]
+    return Outlines(
+        chains, chain_bounds, Polylines(outlines, bounds), areas[order], centroids[order]
+    )
 
 
 _CAP = 0.5  # half a pixel: the footprint edge beyond the centre of an end pixel
@@ -382,7 +376,8 @@ def _outlines(
     outlines = np.empty((out_bounds[-1], 2))
     fixed = np.zeros(out_bounds[-1], np.bool_)
     for c in range(count):
-        _outline_of(points, bounds[c], bounds[c + 1], outlines, fixed, out_bounds[c])
+        lo, hi = out_bounds[c], out_bounds[c + 1]
+        _outline_of(points[bounds[c] : bounds[c + 1]], outlines[lo:hi], fixed[lo:hi])
     smoothed = np.empty_like(outlines)
     for c in range(count):
         lo, hi = out_bounds[c], out_bounds[c + 1]
@@ -404,52 +399,46 @@ def _outlines(
 
 @njit
 def _outline_of(
-    points: NDArray[np.float64],
-    lo: int,
-    hi: int,
-    outlines: NDArray[np.float64],
-    fixed: NDArray[np.bool_],
-    start: int,
+    chain: NDArray[np.float64], outline: NDArray[np.float64], fixed: NDArray[np.bool_]
 ) -> None:
-    """One chain's offset outline (not yet smoothed) into ``outlines[start:]``;
-    ``fixed`` marks the corners of caps, which smoothing must keep."""
-    size = hi - lo
+    """One chain's offset outline (not yet smoothed) into ``outline``; ``fixed``, a
+    flag per row of it, marks the corners of caps, which smoothing must keep."""
+    size = len(chain)
     if size == 1:
         corners = ((-1.0, -1.0), (-1.0, 1.0), (1.0, 1.0), (1.0, -1.0))
         for k in range(4):
-            outlines[start + k, 0] = points[lo, 0] + _CAP * corners[k][0]
-            outlines[start + k, 1] = points[lo, 1] + _CAP * corners[k][1]
+            outline[k, 0] = chain[0, 0] + _CAP * corners[k][0]
+            outline[k, 1] = chain[0, 1] + _CAP * corners[k][1]
         return
     # OpenCV's outer borders have a negative shoelace area in (column, row), for
     # which (-dy, dx) of the tangent points out of the shape. Check rather than
     # trust it; a chain enclosing nothing has no inside, and either side will do.
     cross = 0.0
     for i in range(size):
-        j = lo + (i + 1) % size
-        cross += points[lo + i, 0] * points[j, 1] - points[lo + i, 1] * points[j, 0]
+        j = (i + 1) % size
+        cross += chain[i, 0] * chain[j, 1] - chain[i, 1] * chain[j, 0]
     outward = 1.0 if cross <= 0.0 else -1.0
-    out = start
-    for i in range(size):
-        here = lo + i
-        before = lo + (i - 1) % size
-        after = lo + (i + 1) % size
-        tx = points[after, 0] - points[before, 0]
-        ty = points[after, 1] - points[before, 1]
+    out = 0
+    for here in range(size):
+        before = (here - 1) % size
+        after = (here + 1) % size
+        tx = chain[after, 0] - chain[before, 0]
+        ty = chain[after, 1] - chain[before, 1]
         length = np.hypot(tx, ty)
         if length == 0.0:
             # The chain doubles back here (the end of a line or spur): two corners
             # of a square cap, first on the side it arrives along, then on the side
             # it leaves along.
-            ax = points[here, 0] - points[before, 0]
-            ay = points[here, 1] - points[before, 1]
+            ax = chain[here, 0] - chain[before, 0]
+            ay = chain[here, 1] - chain[before, 1]
             norm = np.hypot(ax, ay)
             ax /= norm
             ay /= norm
             sx, sy = -outward * ay, outward * ax
-            outlines[out, 0] = points[here, 0] + _CAP * (ax + sx)
-            outlines[out, 1] = points[here, 1] + _CAP * (ay + sy)
-            outlines[out + 1, 0] = points[here, 0] + _CAP * (ax - sx)
-            outlines[out + 1, 1] = points[here, 1] + _CAP * (ay - sy)
+            outline[out, 0] = chain[here, 0] + _CAP * (ax + sx)
+            outline[out, 1] = chain[here, 1] + _CAP * (ay + sy)
+            outline[out + 1, 0] = chain[here, 0] + _CAP * (ax - sx)
+            outline[out + 1, 1] = chain[here, 1] + _CAP * (ay - sy)
             fixed[out] = True
             fixed[out + 1] = True
             out += 2
@@ -458,6 +447,6 @@ def _outline_of(
         nx = -outward * ty / length
         ny = outward * tx / length
         offset = 0.5 * max(abs(nx), abs(ny))
-        outlines[out, 0] = points[here, 0] + offset * nx
-        outlines[out, 1] = points[here, 1] + offset * ny
+        outline[out, 0] = chain[here, 0] + offset * nx
+        outline[out, 1] = chain[here, 1] + offset * ny
         out += 1

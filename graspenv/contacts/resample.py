@@ -7,19 +7,17 @@ counter-clockwise means counter-clockwise seen from above the table.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import TypeVar
+from typing import NamedTuple, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from graspenv.geometry import shoelace
+from graspenv.geometry import Polylines, shoelace
 from graspenv.jit import njit
 
 G = TypeVar("G", bound=np.generic)
 
 __all__ = [
-    "bounds_of",
     "checked_bounds",
     "gather",
     "gather_rows",
@@ -32,36 +30,20 @@ __all__ = [
 ]
 
 
-def bounds_of(sizes: Sequence[int] | NDArray[np.intp]) -> NDArray[np.intp]:
-    """Where each of several arrays laid end to end starts, and the total.
-
-    The batch functions here and in :mod:`graspenv.contacts.matching` take every
-    contour of a frame as one array and these bounds: contour c is
-    ``points[bounds[c]:bounds[c + 1]]``.
-
-    Args:
-        sizes: the arrays' lengths, (C,).
-
-    Returns:
-        Shape (C + 1,): 0, then the running totals.
-    """
-    bounds = np.zeros(len(sizes) + 1, dtype=np.intp)
-    np.cumsum(sizes, out=bounds[1:])
-    return bounds
-
-
 def owners_of(bounds: NDArray[np.intp]) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
-    """For each element of arrays laid end to end (:func:`bounds_of`): which array it
-    belongs to, and its index within that array; shapes (bounds[-1],)."""
+    """For each element of arrays laid end to end
+    (:func:`~graspenv.geometry.bounds_of`): which array it belongs to, and its index
+    within that array; shapes (bounds[-1],)."""
     sizes = np.diff(bounds)
     owner = np.repeat(np.arange(len(sizes)), sizes)
     return owner, np.arange(bounds[-1]) - bounds[owner]
 
 
 def checked_bounds(bounds: ArrayLike, total: int, name: str = "bounds") -> NDArray[np.intp]:
-    """``bounds`` of arrays laid end to end over ``total`` rows (:func:`bounds_of`)
-    as an intp array, or a ValueError: the compiled kernels do not check indices, so
-    every public batch function checks its bounds here first."""
+    """``bounds`` of arrays laid end to end over ``total`` rows
+    (:class:`~graspenv.geometry.Polylines`) as an intp array, or a ValueError: the
+    compiled kernels do not check indices, so every public batch function checks its
+    bounds here first."""
     array = np.asarray(bounds)
     if array.ndim != 1 or len(array) < 1 or not np.issubdtype(array.dtype, np.integer):
         raise ValueError(f"{name} must be a 1-D integer array, got {array!r}")
@@ -77,7 +59,8 @@ def checked_bounds(bounds: ArrayLike, total: int, name: str = "bounds") -> NDArr
 def gather(
     points: NDArray[G], bounds: NDArray[np.intp], order: NDArray[np.intp]
 ) -> tuple[NDArray[G], NDArray[np.intp]]:
-    """Some of several arrays laid end to end (:func:`bounds_of`), in a new order.
+    """Some of several arrays laid end to end (:class:`~graspenv.geometry.Polylines`),
+    in a new order.
 
     Compiled for any dtype and row shape (one machine code per combination), for the
     per-frame stages: its indices are not checked (see :func:`checked_bounds`).
@@ -254,7 +237,7 @@ def resample_closed_batch(
     bounds: NDArray[np.intp],
     spacing: float,
     starts: NDArray[np.float64] | None = None,
-) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+) -> Polylines:
     """:func:`resample_closed` for many closed polylines in one pass.
 
     The per-frame path: every contact of a frame is resampled in one compiled call,
@@ -292,24 +275,37 @@ def resample_closed_batch(
         raise ValueError(
             f"starts must have shape ({len(bounds) - 1}, 2), one row a polyline, got {starts.shape}"
         )
-    return resample_kernel(points, bounds, float(spacing), starts)
+    return resample_kernel(Polylines(points, bounds), float(spacing), starts)
+
+
+class _Edges(NamedTuple):
+    """The edge leaving each vertex of closed polylines laid end to end, the last
+    vertex's running back to the polyline's first (compiled code only).
+
+    Attributes:
+        points: the vertices, where each edge starts, shape (T, 2).
+        step: each edge's vector, shape (T, 2).
+        length: each edge's length, shape (T,).
+        arc: where each vertex lies along its own polyline, shape (T,).
+    """
+
+    points: NDArray[np.float64]
+    step: NDArray[np.float64]
+    length: NDArray[np.float64]
+    arc: NDArray[np.float64]
 
 
 @njit
-def resample_kernel(
-    points: NDArray[np.float64],
-    bounds: NDArray[np.intp],
-    spacing: float,
-    starts: NDArray[np.float64],
-) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
+def resample_kernel(polylines: Polylines, spacing: float, starts: NDArray[np.float64]) -> Polylines:
     """:func:`resample_closed_batch` once its arguments are checked; raises its
     ValueError for a polyline of zero perimeter (in the per-frame stages that cannot
     happen: every contact outline encloses an area)."""
+    points, bounds = polylines
     count = len(bounds) - 1
     total = len(points)
     step = np.empty((total, 2))
     length = np.empty(total)
-    arc = np.empty(total)  # where each vertex lies along its own polyline
+    arc = np.empty(total)
     perimeter = np.empty(count)
     sizes = np.empty(count, np.intp)
     for c in range(count):
@@ -326,6 +322,7 @@ def resample_kernel(
         if not along > 0.0:
             raise ValueError("polyline has zero perimeter; it needs at least two distinct points")
         sizes[c] = max(int(np.rint(along / spacing)), 3)
+    edges = _Edges(points, step, length, arc)
     out_bounds = np.zeros(count + 1, np.intp)
     out_bounds[1:] = np.cumsum(sizes)
     out = np.empty((out_bounds[-1], 2))
@@ -333,7 +330,7 @@ def resample_kernel(
         lo, hi = bounds[c], bounds[c + 1]
         origin = 0.0
         if not (np.isnan(starts[c, 0]) or np.isnan(starts[c, 1])):
-            origin = _closest_arc_position(points, step, length, arc, lo, hi, starts[c])
+            origin = _closest_arc_position(edges, lo, hi, starts[c])
         gap = perimeter[c] / sizes[c]
         arcs = arc[lo:hi]
         for k in range(sizes[c]):
@@ -345,21 +342,14 @@ def resample_kernel(
             fraction = (target - arc[segment]) / (edge if edge > 0.0 else 1.0)
             out[out_bounds[c] + k, 0] = points[segment, 0] + fraction * step[segment, 0]
             out[out_bounds[c] + k, 1] = points[segment, 1] + fraction * step[segment, 1]
-    return out, out_bounds
+    return Polylines(out, out_bounds)
 
 
 @njit
-def _closest_arc_position(
-    points: NDArray[np.float64],
-    step: NDArray[np.float64],
-    length: NDArray[np.float64],
-    arc: NDArray[np.float64],
-    lo: int,
-    hi: int,
-    start: NDArray[np.float64],
-) -> float:
-    """Arc position along polyline ``points[lo:hi]`` of its point closest to
+def _closest_arc_position(edges: _Edges, lo: int, hi: int, start: NDArray[np.float64]) -> float:
+    """Arc position along the polyline of edges ``lo:hi`` of its point closest to
     ``start`` (the earliest on a tie)."""
+    points, step, length, arc = edges
     best = -1
     best_distance = np.inf
     best_t = 0.0

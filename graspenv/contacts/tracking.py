@@ -67,11 +67,11 @@ from numpy.typing import NDArray
 from graspenv.config import ContactConfig
 from graspenv.contacts.extract import components, traced_chains, validate_mask
 from graspenv.contacts.resample import gather, orient_ccw_kernel, resample_kernel
-from graspenv.geometry import reach_from
+from graspenv.geometry import Polylines, reach_from
 from graspenv.jit import njit
 from graspenv.surface.geometry import Surface
 
-__all__ = ["Contact", "ContactFrame", "ContactStatus", "ContactTracker"]
+__all__ = ["Contact", "ContactFrame", "ContactSet", "ContactStatus", "ContactTracker"]
 
 ContactStatus = Literal["new", "continuing"]
 G = TypeVar("G", bound=np.generic)
@@ -117,6 +117,40 @@ class Contact:
         return self.status == "new"
 
 
+class ContactSet(NamedTuple):
+    """A frame's contacts as arrays, contact i in ascending id (the compiled stages
+    take them as one argument).
+
+    Attributes:
+        ids: contact ids, ascending, int64, shape (C,).
+        is_new: whether each contact appeared this frame, shape (C,).
+        centroids: metres, world frame, shape (C, 2).
+        areas: m², shape (C,).
+        outlines: the outlines, metres, world frame, one set per contact.
+        contours: the resampled contours, one set per contact.
+    """
+
+    ids: NDArray[np.int64]
+    is_new: NDArray[np.bool_]
+    centroids: NDArray[np.float64]
+    areas: NDArray[np.float64]
+    outlines: Polylines
+    contours: Polylines
+
+
+# Read-only like every frame's arrays: the compiled stages would otherwise compile a
+# second version of themselves for writable ones.
+_NO_POINTS = Polylines(_frozen(np.zeros((0, 2))), _frozen(np.zeros(1, np.intp)))
+_NO_CONTACTS = ContactSet(
+    ids=_frozen(np.zeros(0, np.int64)),
+    is_new=_frozen(np.zeros(0, bool)),
+    centroids=_NO_POINTS.points,
+    areas=_frozen(np.zeros(0)),
+    outlines=_NO_POINTS,
+    contours=_NO_POINTS,
+)
+
+
 @dataclass(frozen=True, eq=False)
 class ContactFrame:
     """The contacts of one camera frame, as arrays (contact i in ascending id).
@@ -126,15 +160,7 @@ class ContactFrame:
 
     Attributes:
         index: frames since the tracker was created or reset, from 0.
-        contact_ids: contact ids, ascending, int64, shape (C,) (:attr:`ids` as a tuple).
-        is_new: whether each contact appeared this frame, shape (C,).
-        centroids: metres, world frame, shape (C, 2).
-        areas: m², shape (C,).
-        outlines: every outline one after another, metres, world frame, shape (L, 2);
-            contact i's is ``outlines[outline_bounds[i]:outline_bounds[i + 1]]``.
-        outline_bounds: shape (C + 1,).
-        contours: every resampled contour one after another, shape (R, 2).
-        contour_bounds: shape (C + 1,).
+        contact_set: the contacts' ids, centroids, areas, outlines and contours.
         removed: ids present in the previous frame and gone now (lift-offs and
             contacts merged into another), ascending.
         origins: where each contact came from, as the rules found it: the previous
@@ -145,14 +171,7 @@ class ContactFrame:
     """
 
     index: int
-    contact_ids: NDArray[np.int64]
-    is_new: NDArray[np.bool_]
-    centroids: NDArray[np.float64]
-    areas: NDArray[np.float64]
-    outlines: NDArray[np.float64]
-    outline_bounds: NDArray[np.intp]
-    contours: NDArray[np.float64]
-    contour_bounds: NDArray[np.intp]
+    contact_set: ContactSet
     removed: tuple[int, ...]
     origins: NDArray[np.int64]
     merged_ids: NDArray[np.int64]
@@ -162,15 +181,24 @@ class ContactFrame:
     @classmethod
     def empty(cls, index: int = 0, removed: tuple[int, ...] = ()) -> ContactFrame:
         """A frame without contacts."""
-        # Read-only like every frame's arrays: the compiled stages would otherwise
-        # compile a second version of themselves for writable ones.
-        bounds = _frozen(np.zeros(1, np.intp))
-        none = _frozen(np.zeros(0, np.int64))
-        points = _frozen(np.zeros((0, 2)))
-        return cls(
-            index, none, _frozen(np.zeros(0, bool)), points, _frozen(np.zeros(0)), points,
-            bounds, points, bounds, removed, none, none, _frozen(np.zeros(0, np.intp)),
-        )  # fmt: skip
+        none = _NO_CONTACTS.ids
+        return cls(index, _NO_CONTACTS, removed, none, none, _frozen(np.zeros(0, np.intp)))
+
+    @property
+    def contact_ids(self) -> NDArray[np.int64]:
+        """Contact ids, ascending, shape (C,) (:attr:`ids` as a tuple)."""
+        return self.contact_set.ids
+
+    @property
+    def contours(self) -> NDArray[np.float64]:
+        """Every resampled contour one after another, metres, world frame, (R, 2);
+        contact i's is ``contours[contour_bounds[i]:contour_bounds[i + 1]]``."""
+        return self.contact_set.contours.points
+
+    @property
+    def contour_bounds(self) -> NDArray[np.intp]:
+        """Shape (C + 1,)."""
+        return self.contact_set.contours.bounds
 
     @property
     def sources(self) -> tuple[tuple[int, ...], ...]:
@@ -183,7 +211,7 @@ class ContactFrame:
         return tuple(
             () if origin < 0 else (origin, *sorted(swallowed.get(i, ()))) if not new else (origin,)
             for i, (origin, new) in enumerate(
-                zip(self.origins.tolist(), self.is_new.tolist(), strict=True)
+                zip(self.origins.tolist(), self.contact_set.is_new.tolist(), strict=True)
             )
         )
 
@@ -191,20 +219,20 @@ class ContactFrame:
     def contacts(self) -> tuple[Contact, ...]:
         """The contacts present, in ascending id (built on first use)."""
         if not self._contacts:
-            ob, cb = self.outline_bounds, self.contour_bounds
-            sources = self.sources
+            arrays, sources = self.contact_set, self.sources
+            (outlines, ob), (contours, cb) = arrays.outlines, arrays.contours
             self._contacts.append(
                 tuple(
                     Contact(
-                        id=int(self.contact_ids[i]),
-                        contour=self.contours[cb[i] : cb[i + 1]],
-                        outline=self.outlines[ob[i] : ob[i + 1]],
-                        centroid=self.centroids[i],
-                        area=float(self.areas[i]),
-                        status="new" if self.is_new[i] else "continuing",
+                        id=int(arrays.ids[i]),
+                        contour=contours[cb[i] : cb[i + 1]],
+                        outline=outlines[ob[i] : ob[i + 1]],
+                        centroid=arrays.centroids[i],
+                        area=float(arrays.areas[i]),
+                        status="new" if arrays.is_new[i] else "continuing",
                         sources=sources[i],
                     )
-                    for i in range(len(self.contact_ids))
+                    for i in range(len(arrays.ids))
                 )
             )
         return self._contacts[0]
@@ -275,7 +303,14 @@ class ContactTracker:
         # Pixels to world (Surface.pixel_to_world): x = (c + 0.5)·sx − w/2,
         # y = h/2 − (r + 0.5)·sy.
         sx, sy = surface.pixel_size
-        self._transform = np.array([sx, sy, surface.size[0], surface.size[1]], dtype=float)
+        self._settings = _Settings(
+            width=surface.shape[1],
+            min_area=self._min_area,
+            pixel_area=self._pixel_area,
+            transform=np.array([sx, sy, surface.size[0], surface.size[1]], dtype=float),
+            radius=self.config.match_radius,
+            spacing=self._spacing,
+        )
         self._previous = ContactFrame.empty()
         self._next_id = 0
         self._index = 0
@@ -323,24 +358,15 @@ class ContactTracker:
         if cv2.countNonZero(image) == 0:  # a fifth of tracing an empty frame's borders
             return self._advance(ContactFrame.empty(self._index, before.ids))
         chains, chain_bounds = traced_chains(image)
-        (ids, is_new, centroids, areas, outlines, outline_bounds, contours, contour_bounds,
-         origins, merged_into, removed) = _track_frame(
-            chains, chain_bounds, image.shape[1], self._min_area,
-            self._transform, before.centroids, before.outlines, before.outline_bounds,
-            before.contact_ids, before.contours, before.contour_bounds,
-            self.config.match_radius, self._spacing, self._next_id,
-        )  # fmt: skip
-        self._next_id += int(np.count_nonzero(is_new))
+        now, origins, merged_into, removed = _track_frame(
+            chains, chain_bounds, before.contact_set, self._next_id, self._settings
+        )
+        self._next_id += int(np.count_nonzero(now.is_new))
+        for array in (now.ids, now.is_new, now.centroids, now.areas, *now.outlines, *now.contours):
+            array.setflags(write=False)
         frame = ContactFrame(
             index=self._index,
-            contact_ids=_frozen(ids),
-            is_new=_frozen(is_new),
-            centroids=_frozen(centroids),
-            areas=_frozen(areas * self._pixel_area),
-            outlines=_frozen(outlines),
-            outline_bounds=_frozen(outline_bounds),
-            contours=_frozen(contours),
-            contour_bounds=_frozen(contour_bounds),
+            contact_set=now,
             removed=tuple(before.contact_ids[removed].tolist()),
             origins=_frozen(origins),
             merged_ids=_frozen(before.contact_ids[merged_into >= 0]),
@@ -354,51 +380,55 @@ class ContactTracker:
         return frame
 
 
+class _Settings(NamedTuple):
+    """The tracker's fixed settings, as its compiled frame reads them.
+
+    Attributes:
+        width: the mask's width, pixels (the raster order of components).
+        min_area: the smallest component kept, pixels.
+        pixel_area: a pixel's area, m².
+        transform: pixels to world, ``(sx, sy, w, h)`` (:func:`_to_world`).
+        radius: ``ContactConfig.match_radius``, metres.
+        spacing: the contours' spacing, metres.
+    """
+
+    width: int
+    min_area: float
+    pixel_area: float
+    transform: NDArray[np.float64]
+    radius: float
+    spacing: float
+
+
 @njit
 def _track_frame(
     chains: NDArray[np.int32],
     chain_bounds: NDArray[np.intp],
-    width: int,
-    min_area: float,
-    transform: NDArray[np.float64],
-    prev_centroids: NDArray[np.float64],
-    prev_outlines: NDArray[np.float64],
-    prev_outline_bounds: NDArray[np.intp],
-    prev_ids: NDArray[np.int64],
-    prev_contours: NDArray[np.float64],
-    prev_contour_bounds: NDArray[np.intp],
-    radius: float,
-    spacing: float,
+    before: ContactSet,
     next_id: int,
-) -> tuple[
-    NDArray[np.int64],
-    NDArray[np.bool_],
-    NDArray[np.float64],
-    NDArray[np.float64],
-    NDArray[np.float64],
-    NDArray[np.intp],
-    NDArray[np.float64],
-    NDArray[np.intp],
-    NDArray[np.int64],
-    NDArray[np.intp],
-    NDArray[np.bool_],
-]:
-    """One frame of :meth:`ContactTracker.update` from its traced chains.
+    settings: _Settings,
+) -> tuple[ContactSet, NDArray[np.int64], NDArray[np.intp], NDArray[np.bool_]]:
+    """One frame of :meth:`ContactTracker.update` from its traced chains and the
+    previous frame's contacts (``before``).
 
-    Returns, with contacts in ascending id: ids, is_new, centroids (metres), areas
-    (pixels), outlines and bounds, contours and bounds, origins (the previous id each
-    keeps or split off, or -1); and over the previous contacts: the index here of the
-    contact each merged into without keeping its id (or -1), and which are removed.
+    Returns:
+        The frame's contacts, in ascending id; their origins (the previous id each
+        keeps or split off, or -1), shape (C,); and over the previous contacts: the
+        index here of the contact each merged into without keeping its id (or -1),
+        and which are removed, shapes (P,).
     """
-    _, _, px_outlines, bounds, areas, px_centroids = components(
-        chains, chain_bounds, width, min_area
-    )
+    found = components(chains, chain_bounds, settings.width, settings.min_area)
+    areas, bounds = found.areas, found.outlines.bounds
     count = len(areas)
-    outlines, _ = orient_ccw_kernel(_to_world(px_outlines, transform), bounds)
-    centroids = _to_world(px_centroids, transform)
+    world_outlines, _ = orient_ccw_kernel(
+        _to_world(found.outlines.points, settings.transform), bounds
+    )
+    outlines = Polylines(world_outlines, bounds)
+    centroids = _to_world(found.centroids, settings.transform)
+    prev_ids, prev_centroids, prev_contours = before.ids, before.centroids, before.contours
     keep, merged, parent = _match(
-        _Contacts(prev_centroids, prev_outlines, prev_outline_bounds), prev_ids,
-        _Contacts(centroids, outlines, bounds), radius,
+        _Contacts(prev_centroids, before.outlines), prev_ids,
+        _Contacts(centroids, outlines), settings.radius,
     )  # fmt: skip
     # A continuing contour starts near its previous first point moved with the
     # centroid; fresh ids go to new contacts in raster order.
@@ -408,9 +438,9 @@ def _track_frame(
     for c in range(count):
         p = keep[c]
         if p >= 0:
-            first = prev_contour_bounds[p]
-            starts[c, 0] = prev_contours[first, 0] + centroids[c, 0] - prev_centroids[p, 0]
-            starts[c, 1] = prev_contours[first, 1] + centroids[c, 1] - prev_centroids[p, 1]
+            first = prev_contours.points[prev_contours.bounds[p]]
+            starts[c, 0] = first[0] + centroids[c, 0] - prev_centroids[p, 0]
+            starts[c, 1] = first[1] + centroids[c, 1] - prev_centroids[p, 1]
             ids[c] = prev_ids[p]
             origins[c] = prev_ids[p]
         else:
@@ -418,7 +448,7 @@ def _track_frame(
             next_id += 1
             if parent[c] >= 0:
                 origins[c] = prev_ids[parent[c]]
-    contours, contour_bounds = resample_kernel(outlines, bounds, spacing, starts)
+    contours = resample_kernel(outlines, settings.spacing, starts)
     order = np.argsort(ids, kind="mergesort")
     rank = np.empty(count, np.intp)
     rank[order] = np.arange(count)
@@ -430,12 +460,13 @@ def _track_frame(
     for p in range(len(prev_ids)):
         if merged[p] >= 0:
             merged_into[p] = rank[merged[p]]
-    outlines, outline_bounds = gather(outlines, bounds, order)
-    contours, contour_bounds = gather(contours, contour_bounds, order)
-    return (
-        ids[order], keep[order] < 0, centroids[order], areas[order], outlines, outline_bounds,
-        contours, contour_bounds, origins[order], merged_into, removed,
+    sorted_outlines, outline_bounds = gather(world_outlines, bounds, order)
+    sorted_contours, contour_bounds = gather(contours.points, contours.bounds, order)
+    now = ContactSet(
+        ids[order], keep[order] < 0, centroids[order], areas[order] * settings.pixel_area,
+        Polylines(sorted_outlines, outline_bounds), Polylines(sorted_contours, contour_bounds),
     )  # fmt: skip
+    return now, origins[order], merged_into, removed
 
 
 @njit
@@ -459,13 +490,30 @@ class _Contacts(NamedTuple):
 
     Attributes:
         centroids: metres, world frame, shape (C, 2).
-        outlines: every outline one after another, metres, world frame, (L, 2).
-        bounds: contact i's outline is ``outlines[bounds[i]:bounds[i + 1]]``, (C + 1,).
+        outlines: the outlines, metres, world frame, one set per contact.
     """
 
     centroids: NDArray[np.float64]
-    outlines: NDArray[np.float64]
-    bounds: NDArray[np.intp]
+    outlines: Polylines
+
+
+class _ByX(NamedTuple):
+    """Centroids in the order of their x, for the sweeps of the matching rules
+    (compiled code only).
+
+    Attributes:
+        order: the centroids' indices, by x, shape (C,).
+        xs: their x in that order, metres, shape (C,).
+    """
+
+    order: NDArray[np.intp]
+    xs: NDArray[np.float64]
+
+
+@njit
+def _by_x(centroids: NDArray[np.float64]) -> _ByX:
+    order = np.argsort(centroids[:, 0], kind="mergesort")
+    return _ByX(order, centroids[order, 0])
 
 
 @njit
@@ -488,14 +536,14 @@ def _match(
     parent = np.full(n_cur, -1, np.intp)
     if n_prev == 0 or n_cur == 0:
         return keep, merged, parent
-    prev_reach = reach_from(prev_centroids, before.outlines, before.bounds)
-    reach = reach_from(centroids, now.outlines, now.bounds)
-    by_x = np.argsort(centroids[:, 0], kind="mergesort")
-    xs = centroids[by_x, 0]
+    prev_reach = reach_from(prev_centroids, before.outlines)
+    reach = reach_from(centroids, now.outlines)
+    sweep = _by_x(centroids)
+    by_x, xs = sweep
     taken = np.zeros(n_prev, np.bool_)
 
     # 1. Motion: greedy one-to-one by distance, ties by previous id then raster.
-    pair_p, pair_c, pair_d = _near_pairs(prev_centroids, centroids, by_x, xs, radius)
+    pair_p, pair_c, pair_d = _near_pairs(prev_centroids, centroids, sweep, radius)
     order = np.argsort(pair_c, kind="mergesort")
     order = order[np.argsort(prev_ids[pair_p[order]], kind="mergesort")]
     order = order[np.argsort(pair_d[order], kind="mergesort")]
@@ -545,8 +593,7 @@ def _match(
 
     # 3. Splits: a leftover current contact overlapping a previous one split off the
     # nearest such (ties: lower id).
-    by_px = np.argsort(prev_centroids[:, 0], kind="mergesort")
-    pxs = prev_centroids[by_px, 0]
+    by_px, pxs = _by_x(prev_centroids)
     prev_widest = prev_reach.max()
     for c in range(n_cur):
         if keep[c] >= 0:
@@ -574,14 +621,11 @@ def _distance(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
 
 @njit
 def _near_pairs(
-    prev_centroids: NDArray[np.float64],
-    centroids: NDArray[np.float64],
-    by_x: NDArray[np.intp],
-    xs: NDArray[np.float64],
-    radius: float,
+    prev_centroids: NDArray[np.float64], centroids: NDArray[np.float64], sweep: _ByX, radius: float
 ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64]]:
     """(previous, current, distance) of every pair of centroids at most ``radius``
-    apart, found by a sweep over the current centroids sorted by x."""
+    apart, found by a sweep over the current centroids sorted by x (``sweep``)."""
+    by_x, xs = sweep
     ranges = np.empty((len(prev_centroids), 2), np.intp)
     total = 0
     for p in range(len(prev_centroids)):
@@ -605,8 +649,8 @@ def _near_pairs(
 @njit
 def _overlap(before: _Contacts, p: int, now: _Contacts, c: int) -> bool:
     """Whether previous contact p and current contact c overlap (module docstring)."""
-    mine = before.outlines[before.bounds[p] : before.bounds[p + 1]]
-    theirs = now.outlines[now.bounds[c] : now.bounds[c + 1]]
+    mine = before.outlines.points[before.outlines.bounds[p] : before.outlines.bounds[p + 1]]
+    theirs = now.outlines.points[now.outlines.bounds[c] : now.outlines.bounds[c + 1]]
     if _inside(now.centroids[c, 0], now.centroids[c, 1], mine):
         return True
     if _inside(before.centroids[p, 0], before.centroids[p, 1], theirs):

@@ -387,12 +387,12 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
 
     def _read_state(self, step: int) -> EpisodeState:
         sim, name = self._sim, self.task.object_name
-        position, quaternion = sim.object_pose(name)
-        linear, angular = sim.object_velocity(name)
+        pose, velocity = sim.object_pose(name), sim.object_velocity(name)
+        (position, quaternion), (linear, angular) = pose, velocity
         now = yaw_of(quaternion)
         self._yaw_unwrapped += yaw_step(now, self._yaw_last)
         self._yaw_last = now
-        self._measure(position, quaternion, linear, angular)
+        self._measure(pose, velocity)
         m = self._metrics
         return EpisodeState(
             position=position,
@@ -410,12 +410,12 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
 
     def _measure(
         self,
-        position: NDArray[np.float64],
-        quaternion: NDArray[np.float64],
-        linear: NDArray[np.float64],
-        angular: NDArray[np.float64],
+        pose: tuple[NDArray[np.float64], NDArray[np.float64]],
+        velocity: tuple[NDArray[np.float64], NDArray[np.float64]],
     ) -> None:
-        """Grasp metrics and per-finger forces from the last physics sub-step."""
+        """Grasp metrics and per-finger forces from the last physics sub-step, of the
+        object at ``pose`` (position, quaternion) moving at ``velocity`` (linear,
+        angular), as the simulation reports them."""
         sim, name = self._sim, self.task.object_name
         report = sim.contact_report(name)
         particles = report.particle >= 0
@@ -423,10 +423,8 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         obj = sim.config.objects[0]
         self._metrics = grasp_metrics(
             report,
-            position,
-            quaternion,
-            linear,
-            angular,
+            *pose,
+            *velocity,
             velocities,
             mu=obj.friction * sim.config.proxy.particle_friction,
         )

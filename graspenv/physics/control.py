@@ -36,7 +36,7 @@ of each sub-step is one call of :func:`drive_velocities`.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -44,7 +44,15 @@ from numpy.typing import NDArray
 from graspenv.config import PhysicsConfig, ProxyConfig
 from graspenv.jit import njit
 
-__all__ = ["REST_TOLERANCE", "ParticleDrive", "drive_velocities", "frame_substeps"]
+__all__ = [
+    "REST_TOLERANCE",
+    "DriveLaw",
+    "ParticleDrive",
+    "Stacks",
+    "TargetPaths",
+    "drive_velocities",
+    "frame_substeps",
+]
 
 #: A bottom particle may sit this far above its support before it is pulled down,
 #: metres (Bullet's resting contacts sink about 0.01-0.03 mm, never rise).
@@ -68,47 +76,90 @@ def frame_substeps(travel: float, physics: PhysicsConfig) -> int:
     return min(most, math.ceil(travel / physics.substep_travel))
 
 
-@dataclass(frozen=True)
-class ParticleDrive:
-    """One frame's control law for K contour points of L-particle stacks.
+class TargetPaths(NamedTuple):
+    """Where each particle's target goes over a frame: along the straight line from
+    ``start`` to ``start + step``, at constant velocity.
 
     Attributes:
-        start: each particle's target at the start of the frame, metres, (K·L, 2).
-        step: its target's travel over the frame, metres, (K·L, 2).
+        start: each particle's target at the start of the frame, metres, (n, 2).
+        step: its target's travel over the frame, metres, (n, 2).
         feed_forward: the target velocity's share the position term misses, m/s,
-            (K·L, 2).
-        is_bottom: which particles are at the bottom of their stack, (K·L,).
-        bottom_of: for each upper particle, the row of its stack's bottom one,
-            (U,), in row order of the upper particles.
-        rise: for each upper particle, its height above the bottom one, metres, (U,).
-        substeps: sub-steps in the frame.
-        tau: the law's Δt, seconds.
-        gain: h / Δt.
-        v_max: the commanded speed's limit, m/s.
-        dv_max: the velocity change a sub-step's force limit allows, m/s.
-        press_dv: the vertical velocity change of a bottom particle on the table a
-            sub-step (the press, with its weight cancelled), m/s.
-        top_press_dv: the same for a bottom particle resting on an object, m/s.
-        table_rest: the resting height of a particle on the table, metres.
-        lift_dv: gravity's velocity change over a sub-step, m/s (an upper particle's
-            weight is cancelled).
+            (n, 2).
     """
 
     start: NDArray[np.float64]
     step: NDArray[np.float64]
     feed_forward: NDArray[np.float64]
+
+
+class Stacks(NamedTuple):
+    """How K stacks of L particles lie in the rows of a drive: stack by stack, each
+    bottom first.
+
+    Attributes:
+        is_bottom: which particles are at the bottom of their stack, (K·L,).
+        bottom_of: for each upper particle, the row of its stack's bottom one,
+            (U,), in row order of the upper particles.
+        rise: for each upper particle, its height above the bottom one, metres, (U,).
+    """
+
     is_bottom: NDArray[np.bool_]
     bottom_of: NDArray[np.intp]
     rise: NDArray[np.float64]
-    substeps: int
+
+    @classmethod
+    def of(cls, k: int, layers: int, spacing: float) -> Stacks:
+        """``k`` stacks of ``layers`` particles, ``spacing`` metres apart."""
+        if layers == 1:  # single particles, the common case: no stacks to hold
+            return cls(np.ones(k, bool), np.zeros(0, np.intp), np.zeros(0))
+        is_upper = np.tile(np.arange(layers) > 0, k)
+        return cls(
+            ~is_upper,
+            np.repeat(np.arange(k) * layers, layers)[is_upper],
+            np.tile(np.arange(layers) * spacing, k)[is_upper],
+        )
+
+
+class DriveLaw(NamedTuple):
+    """The constants of Wilson's law a frame's sub-steps share (module docstring).
+
+    Attributes:
+        tau: the law's Δt, seconds.
+        gain: h / Δt.
+        v_max: the commanded speed's limit, m/s.
+        dv_max: the velocity change a sub-step's force limit allows, m/s.
+        lift_dv: gravity's velocity change over a sub-step, m/s (an upper particle's
+            weight is cancelled).
+    """
+
     tau: float
     gain: float
     v_max: float
     dv_max: float
+    lift_dv: float
+
+
+class ParticleDrive(NamedTuple):
+    """One frame's control law for K contour points of L-particle stacks.
+
+    Attributes:
+        targets: each particle's target over the frame, K·L rows.
+        stacks: how the stacks lie in those rows.
+        law: the law's constants.
+        substeps: sub-steps in the frame.
+        press_dv: the vertical velocity change of a bottom particle on the table a
+            sub-step (the press, with its weight cancelled), m/s.
+        top_press_dv: the same for a bottom particle resting on an object, m/s.
+        table_rest: the resting height of a particle on the table, metres.
+    """
+
+    targets: TargetPaths
+    stacks: Stacks
+    law: DriveLaw
+    substeps: int
     press_dv: float
     top_press_dv: float
     table_rest: float
-    lift_dv: float
 
     @classmethod
     def for_frame(
@@ -134,30 +185,24 @@ class ParticleDrive:
         tau = max(physics.control_time, h) if control_dt is None else max(control_dt, h)
         mass = proxy.particle_mass
         step = goal - start
-        k = len(goal) // layers
-        if layers == 1:  # single particles, the common case: no stacks to hold
-            is_bottom = np.ones(k, bool)
-            bottom_of, rise = np.zeros(0, np.intp), np.zeros(0)
-        else:
-            is_upper = np.tile(np.arange(layers) > 0, k)
-            is_bottom = ~is_upper
-            bottom_of = np.repeat(np.arange(k) * layers, layers)[is_upper]
-            rise = np.tile(np.arange(layers) * proxy.stack_spacing, k)[is_upper]
         return cls(
-            start=start,
-            step=step,
-            # With Δt equal to the sub-step the position term alone lands on the
-            # moving target (the paper's law); with a longer Δt it would lag by u·Δt,
-            # so the target's velocity is fed forward by the share it misses.
-            feed_forward=(1.0 - h / tau) * step / frame_dt,
-            is_bottom=is_bottom,
-            bottom_of=bottom_of,
-            rise=rise,
+            targets=TargetPaths(
+                start,
+                step,
+                # With Δt equal to the sub-step the position term alone lands on the
+                # moving target (the paper's law); with a longer Δt it would lag by
+                # u·Δt, so the target's velocity is fed forward by the share it misses.
+                (1.0 - h / tau) * step / frame_dt,
+            ),
+            stacks=Stacks.of(len(goal) // layers, layers, proxy.stack_spacing),
+            law=DriveLaw(
+                tau=tau,
+                gain=h / tau,
+                v_max=physics.max_particle_speed,
+                dv_max=physics.max_particle_force * h / mass,
+                lift_dv=physics.gravity * h,
+            ),
             substeps=substeps,
-            tau=tau,
-            gain=h / tau,
-            v_max=physics.max_particle_speed,
-            dv_max=physics.max_particle_force * h / mass,
             # Bullet adds g·h itself; the weight is cancelled and the press applied.
             press_dv=(physics.gravity - proxy.down_force / mass) * h,
             top_press_dv=(
@@ -165,8 +210,12 @@ class ParticleDrive:
             )
             * h,
             table_rest=proxy.particle_radius,
-            lift_dv=physics.gravity * h,
         )
+
+    @property
+    def is_bottom(self) -> NDArray[np.bool_]:
+        """Which particles are at the bottom of their stack, (K·L,)."""
+        return self.stacks.is_bottom
 
     def presses(self, rest_z: NDArray[np.float64]) -> NDArray[np.float64]:
         """Each bottom particle's press a sub-step (:attr:`press_dv` on the table,
@@ -187,23 +236,18 @@ class ParticleDrive:
         from the particles' positions and velocities now, the bottom particles'
         resting heights (metres) and their presses (:meth:`presses`), one per bottom
         particle in row order."""
+        # The kernel takes the bundles' arrays one by one: it runs every sub-step, and
+        # numba types a NamedTuple argument in Python at each call (about a
+        # microsecond), plain arrays in C.
         return drive_velocities(
             position,
             velocity,
-            self.start,
-            self.step,
+            *self.targets,
             substep / self.substeps,
-            self.feed_forward,
-            self.is_bottom,
+            *self.stacks,
             rest_z,
-            self.bottom_of,
-            self.rise,
-            self.tau,
-            self.gain,
-            self.v_max,
-            self.dv_max,
             press,
-            self.lift_dv,
+            *self.law,
         )
 
 
@@ -213,21 +257,24 @@ def drive_velocities(
     velocity: NDArray[np.float64],
     start: NDArray[np.float64],
     step: NDArray[np.float64],
-    fraction: float,
     feed_forward: NDArray[np.float64],
+    fraction: float,
     is_bottom: NDArray[np.bool_],
-    rest_z: NDArray[np.float64],
     bottom_of: NDArray[np.intp],
     rise: NDArray[np.float64],
+    rest_z: NDArray[np.float64],
+    press_dv: NDArray[np.float64],
     tau: float,
     gain: float,
     v_max: float,
     dv_max: float,
-    press_dv: NDArray[np.float64],
     lift_dv: float,
 ) -> NDArray[np.float64]:
     """One sub-step of the law (module docstring) for every particle: the velocity
-    to set, m/s, (n, 3). ``fraction`` is how far through the frame the sub-step ends."""
+    to set, m/s, (n, 3), from the particles' states now, the frame's targets, stacks
+    and law, and the bottom particles' resting heights and presses
+    (:meth:`ParticleDrive.velocities`). ``fraction`` is how far through the frame the
+    sub-step ends."""
     n = len(position)
     new = velocity.copy()
     for i in range(n):

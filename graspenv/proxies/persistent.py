@@ -42,7 +42,6 @@ paper's plain form: the raw previous contour matched against the tracker's conto
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import NamedTuple
 
 import numpy as np
@@ -50,9 +49,9 @@ from numpy.typing import NDArray
 
 from graspenv.config import ProxyConfig
 from graspenv.contacts.matching import correspond_batch
-from graspenv.contacts.resample import bounds_of, gather, gather_rows, resample_kernel
-from graspenv.contacts.tracking import ContactFrame
-from graspenv.geometry import reach_from
+from graspenv.contacts.resample import gather, gather_rows, resample_kernel
+from graspenv.contacts.tracking import ContactFrame, ContactSet
+from graspenv.geometry import Polylines, bounds_of, reach_from
 from graspenv.jit import njit
 from graspenv.physics.world import PhysicsWorld
 from graspenv.proxies.base import ProxyCommand, rotation_kernel
@@ -60,43 +59,53 @@ from graspenv.proxies.base import ProxyCommand, rotation_kernel
 __all__ = ["PersistentProxies"]
 
 
-@dataclass
-class _Tracks:
+class _Smoothed(NamedTuple):
+    """The alpha-beta filter of each contact's centroid (``proxy.smoothing``,
+    :func:`_alpha_beta`).
+
+    Attributes:
+        centroids: the filtered centroids, metres, shape (T, 2) (the centroids
+            themselves unless ``proxy.smoothing`` is on).
+        drift: the filtered centroid velocities, metres a frame, (T, 2); NaN in a
+            contact's first frame.
+    """
+
+    centroids: NDArray[np.float64]
+    drift: NDArray[np.float64]
+
+
+class _Tracks(NamedTuple):
     """Every tracked contact's contour points and the particle stacks that follow
     them, laid end to end in ascending contact id.
 
     Attributes:
         ids: contact ids, ascending, shape (T,).
-        bounds: track t's points are ``points[bounds[t]:bounds[t + 1]]``, (T + 1,).
-        points: contour points of the last frame, metres, world frame, shape (P, 2).
-        particles: pool ids, shape (P, L), column 0 at the bottom; a row of -1 for a
-            culled point (no particle).
+        contours: each track's contour points of the last frame, metres, world frame,
+            (P, 2) in all.
+        particles: pool ids, shape (P, L), column 0 at the bottom, rows as in
+            ``contours``; a row of -1 for a culled point (no particle).
+        born: which points got their particle in the last frame, shape (P,).
         centroids: each contact's centroid in the last frame, metres, shape (T, 2).
         travel: how far any point of each contact moved in the last frame at most,
             metres, shape (T,).
-        born: which points got their particle in the last frame, shape (P,).
-        smoothed: each contact's filtered centroid, metres, (T, 2) (the centroid
-            itself unless ``proxy.smoothing`` is on).
-        drift: each contact's filtered centroid velocity, metres a frame, (T, 2);
-            NaN in a contact's first frame.
+        smoothed: each contact's filtered centroid.
     """
 
     ids: NDArray[np.int64]
-    bounds: NDArray[np.intp]
-    points: NDArray[np.float64]
+    contours: Polylines
     particles: NDArray[np.int64]
+    born: NDArray[np.bool_]
     centroids: NDArray[np.float64]
     travel: NDArray[np.float64]
-    born: NDArray[np.bool_]
-    smoothed: NDArray[np.float64]
-    drift: NDArray[np.float64]
+    smoothed: _Smoothed
 
     @classmethod
     def empty(cls, layers: int) -> _Tracks:
+        points = np.zeros((0, 2))
         return cls(
-            np.zeros(0, np.int64), np.zeros(1, np.intp), np.zeros((0, 2)),
-            np.zeros((0, layers), np.int64), np.zeros((0, 2)), np.zeros(0), np.zeros(0, bool),
-            np.zeros((0, 2)), np.zeros((0, 2)),
+            np.zeros(0, np.int64), Polylines(points, np.zeros(1, np.intp)),
+            np.zeros((0, layers), np.int64), np.zeros(0, bool), points, np.zeros(0),
+            _Smoothed(points, points),
         )  # fmt: skip
 
 
@@ -148,8 +157,9 @@ class PersistentProxies:
         """
         tracks = self._tracks
         result = {}
+        bounds = tracks.contours.bounds
         for t, contact_id in enumerate(tracks.ids.tolist()):
-            particles = tracks.particles[tracks.bounds[t] : tracks.bounds[t + 1]]
+            particles = tracks.particles[bounds[t] : bounds[t + 1]]
             result[contact_id] = particles[particles[:, 0] >= 0].reshape(-1)
         return result
 
@@ -159,32 +169,30 @@ class PersistentProxies:
         proxy, layers, before = self._proxy, self._layers, self._tracks
         if len(before.ids) == 0 and len(frame) == 0:  # nothing on the table
             return ProxyCommand(np.zeros((0, layers), np.int64), np.zeros((0, 2)), np.zeros(0))
+        now = frame.contact_set
         plan = _plan_follow(
-            before.ids, before.bounds, before.points, before.centroids,
-            frame.contact_ids, frame.is_new, frame.centroids, frame.outlines,
-            frame.outline_bounds, frame.contours, frame.contour_bounds,
-            proxy.track_hand_rotation, proxy.predicted_resampling, self._spacing,
-        )  # fmt: skip
+            before, now, proxy.track_hand_rotation, proxy.predicted_resampling, self._spacing
+        )
         # Every track no contact continues gives its particles back: lift-offs,
         # merges, reused ids.
         self._release(before.particles[plan.ended_rows])
-        self.hand_turn = plan.turn
+        self.hand_turn = plan.motion.turn
         followed = self._follow(before, plan)
-        tracks = self._touch_down(frame, plan.follows, followed)
+        tracks = self._touch_down(now, plan.follows, followed)
         self._tracks = tracks
-        if len(tracks.points) == 0:
+        if len(tracks.particles) == 0:
             empty = np.zeros((0, layers), np.int64)
             return ProxyCommand(empty, np.zeros((0, 2)), np.zeros(0))
 
-        sizes = np.diff(tracks.bounds)
-        spin = np.repeat(np.where(plan.follows, plan.turn / self._dt, 0.0), sizes)
-        particles, targets, born = tracks.particles, tracks.points, tracks.born
+        sizes = np.diff(tracks.contours.bounds)
+        spin = np.repeat(np.where(plan.follows, plan.motion.turn / self._dt, 0.0), sizes)
+        particles, targets, born = tracks.particles, tracks.contours.points, tracks.born
         if self._cull or proxy.penetration_limit:
             owner, depth = self._world.footprint_depth(targets)
         culled = 0
         if self._cull:
             # In place: the tracks keep the culling's changes.
-            self._cull_far(particles, targets, depth, np.repeat(tracks.travel, sizes), born)
+            self._cull_far(tracks, depth, np.repeat(tracks.travel, sizes))
             embodied = particles[:, 0] >= 0
             culled = len(embodied) - int(np.count_nonzero(embodied))
             # The command gets the embodied rows as arrays of its own.
@@ -212,13 +220,7 @@ class PersistentProxies:
         if plan.contacts.size == 0:
             return _Tracks.empty(layers)
         match = correspond_batch(
-            plan.predicted,
-            plan.previous_bounds,
-            plan.current,
-            plan.current_bounds,
-            proxy.window,
-            proxy.matcher,
-            proxy.search,
+            *plan.predicted, *plan.current, proxy.window, proxy.matcher, proxy.search
         )
         pool = self._world.pool
         previous_particles = before.particles[plan.previous_rows]
@@ -226,7 +228,8 @@ class PersistentProxies:
         particles, beside, anchors, lost = _inherit(
             previous_particles, match.predecessor, match.anchor
         )
-        born = np.zeros(len(plan.current), bool)
+        current = plan.current.points
+        born = np.zeros(len(current), bool)
         if beside.size:
             ids = pool.acquire(beside.size * layers).reshape(-1, layers)
             pool.place(ids.reshape(-1), pool.positions(particles[anchors].reshape(-1)))
@@ -236,39 +239,42 @@ class PersistentProxies:
         # near, or else those contours are put down afresh.
         if lost.size and not self._cull:
             ids = pool.acquire(lost.size * layers).reshape(lost.size, -1)
-            self._put_down(ids, plan.current[lost])
+            self._put_down(ids, current[lost])
             particles[lost] = ids
             born[lost] = True
-        points, smoothed, drift = plan.current, plan.centroids, np.zeros_like(plan.centroids)
+        centroids = plan.motion.after
+        points, smoothed = current, _Smoothed(centroids, np.zeros_like(centroids))
         if proxy.smoothing < 1.0:
             rows = plan.track_rows
-            smoothed, drift = _alpha_beta(
-                before.smoothed[rows],
-                before.drift[rows],
-                plan.centroids,
-                proxy.smoothing,
-                proxy.smoothing_gate,
+            was = before.smoothed.centroids[rows]
+            smoothed = _Smoothed(
+                *_alpha_beta(
+                    was,
+                    before.smoothed.drift[rows],
+                    centroids,
+                    proxy.smoothing,
+                    proxy.smoothing_gate,
+                )
             )
-            turn = rotation_kernel(before.smoothed[rows], smoothed)
-            points = _smooth_points(
-                before.points[plan.previous_rows], plan.previous_bounds, before.smoothed[rows],
-                smoothed, turn, plan.current, match.predecessor, proxy.smoothing,
-            )  # fmt: skip
+            motion = _Motion(was, smoothed.centroids, rotation_kernel(was, smoothed.centroids))
+            previous = Polylines(before.contours.points[plan.previous_rows], plan.predicted.bounds)
+            points = _smooth_points(previous, motion, current, match.predecessor, proxy.smoothing)
         return _Tracks(
-            plan.ids, plan.current_bounds, points, particles, plan.centroids,
-            plan.travel, born, smoothed, drift,
+            plan.ids, Polylines(points, plan.current.bounds), particles, born, centroids,
+            plan.travel, smoothed,
         )  # fmt: skip
 
     def _touch_down(
-        self, frame: ContactFrame, follows: NDArray[np.bool_], followed: _Tracks
+        self, now: ContactSet, follows: NDArray[np.bool_], followed: _Tracks
     ) -> _Tracks:
         """All of the frame's tracks, in ascending id: the ``followed`` ones and a
-        new one for every other contact (step 4), put down by ray casting unless the
-        culling will do it."""
+        new one for every contact of the frame (``now``) that follows none (step 4),
+        put down by ray casting unless the culling will do it."""
         new = np.flatnonzero(~follows)
         if new.size == 0:
             return followed
-        points, bounds = gather(frame.contours, frame.contour_bounds, new)
+        points, bounds = gather(now.contours.points, now.contours.bounds, new)
+        new_centroids = now.centroids[new]
         if self._cull:  # the culling puts down the points that are near an object
             particles = np.full((len(points), self._layers), -1, np.int64)
             born = np.zeros(len(points), bool)
@@ -277,26 +283,28 @@ class PersistentProxies:
             particles = particles.reshape(len(points), -1)
             self._put_down(particles, points)
             born = np.ones(len(points), bool)
+        new_drift = np.full((new.size, 2), np.nan)
         if followed.ids.size == 0:
             return _Tracks(
-                frame.contact_ids[new], bounds, points, particles,
-                frame.centroids[new].copy(), np.zeros(new.size), born,
-                frame.centroids[new].copy(), np.full((new.size, 2), np.nan),
+                now.ids[new], Polylines(points, bounds), particles, born,
+                new_centroids.copy(), np.zeros(new.size), _Smoothed(new_centroids, new_drift),
             )  # fmt: skip
         # Both kinds together, then in the frame's (ascending id) order.
-        both_bounds = bounds_of(np.concatenate([np.diff(followed.bounds), np.diff(bounds)]))
+        sizes = np.concatenate([np.diff(followed.contours.bounds), np.diff(bounds)])
         order = np.argsort(np.concatenate([np.flatnonzero(follows), new]), kind="stable")
-        rows, tracks_bounds = gather_rows(both_bounds, order)
+        rows, tracks_bounds = gather_rows(bounds_of(sizes), order)
+        smoothed = followed.smoothed
         return _Tracks(
-            frame.contact_ids.copy(),
-            tracks_bounds,
-            np.concatenate([followed.points, points])[rows],
+            now.ids.copy(),
+            Polylines(np.concatenate([followed.contours.points, points])[rows], tracks_bounds),
             np.concatenate([followed.particles, particles])[rows],
-            frame.centroids.copy(),
-            np.concatenate([followed.travel, np.zeros(new.size)])[order],
             np.concatenate([followed.born, born])[rows],
-            np.concatenate([followed.smoothed, frame.centroids[new]])[order],
-            np.concatenate([followed.drift, np.full((new.size, 2), np.nan)])[order],
+            now.centroids.copy(),
+            np.concatenate([followed.travel, np.zeros(new.size)])[order],
+            _Smoothed(
+                np.concatenate([smoothed.centroids, new_centroids])[order],
+                np.concatenate([smoothed.drift, new_drift])[order],
+            ),
         )
 
     def _release(self, particles: NDArray[np.int64]) -> None:
@@ -305,23 +313,18 @@ class PersistentProxies:
         self._world.pool.release(ids[ids >= 0])
 
     def _cull_far(
-        self,
-        particles: NDArray[np.int64],
-        points: NDArray[np.float64],
-        depth: NDArray[np.float64],
-        travel: NDArray[np.float64],
-        born: NDArray[np.bool_],
+        self, tracks: _Tracks, depth: NDArray[np.float64], travel: NDArray[np.float64]
     ) -> None:
-        """Give particles to points near an object and take them from far ones, in place.
+        """Give particles to the tracks' points near an object and take them from far
+        ones, in place (their ``particles`` and ``born``).
 
         Args:
-            particles: (K, L) pool ids, -1 rows for culled points; updated.
-            points: the contour points, metres, (K, 2).
+            tracks: this frame's tracks, K points.
             depth: each point's depth in the nearest footprint, metres (negative
                 outside), (K,).
             travel: how far each point's contact moved in this frame at most, (K,).
-            born: which points got their particle this frame, (K,); updated.
         """
+        particles, points, born = tracks.particles, tracks.contours.points, tracks.born
         world, margin = self._world, self._proxy.cull_margin
         linear = world.object_states().linear
         speeds = np.hypot(linear[:, 0], linear[:, 1])
@@ -377,6 +380,21 @@ class PersistentProxies:
         )
 
 
+class _Motion(NamedTuple):
+    """How each of several contacts moved rigidly in a frame: turned by ``turn``
+    about its centroid ``before[k]`` and carried to ``after[k]`` (compiled code).
+
+    Attributes:
+        before: the centroids before, metres, world frame, shape (F, 2).
+        after: the centroids after, metres, shape (F, 2).
+        turn: the turn, the same for every contact, radians.
+    """
+
+    before: NDArray[np.float64]
+    after: NDArray[np.float64]
+    turn: float
+
+
 class _Plan(NamedTuple):
     """What a frame's continuing contacts need, from :func:`_plan_follow` (which
     builds it in compiled code).
@@ -384,53 +402,42 @@ class _Plan(NamedTuple):
     Attributes:
         follows: which contacts of the frame continue a track, shape (C,).
         ended_rows: rows of the tracks no contact continues, (E,).
-        turn: the hand's turn this frame, radians.
         contacts: the following contacts (frame indices), (F,).
         ids: their ids, (F,).
-        centroids: their centroids now, metres, (F, 2).
         track_rows: the tracks they continue, (F,).
+        motion: how they moved since the last frame: their centroids then and now
+            (metres, (F, 2)) and the hand's turn (radians).
         previous_rows: the rows of their tracks' last points, (P,).
-        previous_bounds: those points' bounds per contact, (F + 1,).
-        predicted: where the last points should be now, metres, (P, 2).
+        predicted: where those points should be now, metres, one set per contact.
         current: the current contours (resampled from the predicted first points, or
-            the tracker's), metres, (Q, 2).
-        current_bounds: (F + 1,).
+            the tracker's), metres, one set per contact.
         travel: how far any point of each moved this frame at most, metres, (F,).
     """
 
     follows: NDArray[np.bool_]
     ended_rows: NDArray[np.intp]
-    turn: float
     contacts: NDArray[np.intp]
     ids: NDArray[np.int64]
-    centroids: NDArray[np.float64]
     track_rows: NDArray[np.intp]
+    motion: _Motion
     previous_rows: NDArray[np.intp]
-    previous_bounds: NDArray[np.intp]
-    predicted: NDArray[np.float64]
-    current: NDArray[np.float64]
-    current_bounds: NDArray[np.intp]
+    predicted: Polylines
+    current: Polylines
     travel: NDArray[np.float64]
 
 
 @njit
 def _plan_follow(
-    track_ids: NDArray[np.int64],
-    track_bounds: NDArray[np.intp],
-    track_points: NDArray[np.float64],
-    track_centroids: NDArray[np.float64],
-    ids: NDArray[np.int64],
-    is_new: NDArray[np.bool_],
-    centroids: NDArray[np.float64],
-    outlines: NDArray[np.float64],
-    outline_bounds: NDArray[np.intp],
-    contours: NDArray[np.float64],
-    contour_bounds: NDArray[np.intp],
+    before: _Tracks,
+    frame: ContactSet,
     track_hand_rotation: bool,
     predicted_resampling: bool,
     spacing: float,
 ) -> _Plan:
-    """Steps 2 and 3 of the module docstring up to the matching."""
+    """Steps 2 and 3 of the module docstring up to the matching, from the tracks of
+    the last frame (``before``) to the contacts of this one (``frame``)."""
+    track_ids, track_bounds = before.ids, before.contours.bounds
+    ids = frame.ids
     count = len(ids)
     # Which track each contact continues: the same id, not new this frame.
     follows = np.zeros(count, np.bool_)
@@ -438,7 +445,7 @@ def _plan_follow(
     ended = np.ones(len(track_ids), np.bool_)
     for c in range(count):
         t = np.searchsorted(track_ids, ids[c])
-        if not is_new[c] and t < len(track_ids) and track_ids[t] == ids[c]:
+        if not frame.is_new[c] and t < len(track_ids) and track_ids[t] == ids[c]:
             follows[c] = True
             track[c] = t
             ended[t] = False
@@ -446,32 +453,32 @@ def _plan_follow(
     continued = track[contacts]
     ended_rows, _ = gather_rows(track_bounds, np.flatnonzero(ended))
     previous_rows, previous_bounds = gather_rows(track_bounds, continued)
-    before = track_centroids[continued]
-    after = centroids[contacts]
-    turn = 0.0
+    after = frame.centroids[contacts]
+    motion = _Motion(before.centroids[continued], after, 0.0)
     if track_hand_rotation and len(contacts) >= 2:
-        turn = rotation_kernel(before, after)
+        motion = _Motion(motion.before, after, rotation_kernel(motion.before, after))
     # Where last frame's points should be now: carried by their contact's centroid and
     # turned by the hand's turn (0 when that estimate is off).
-    predicted = track_points[previous_rows]
+    predicted = Polylines(before.contours.points[previous_rows], previous_bounds)
     if track_hand_rotation or predicted_resampling:
-        predicted = _carry(predicted, previous_bounds, before, after, turn)
+        predicted = Polylines(_carry(predicted, motion), previous_bounds)
     if predicted_resampling:
-        chosen, chosen_bounds = gather(outlines, outline_bounds, contacts)
-        starts = predicted[previous_bounds[:-1]]
-        current, current_bounds = resample_kernel(chosen, chosen_bounds, spacing, starts)
+        outlines, outline_bounds = gather(frame.outlines.points, frame.outlines.bounds, contacts)
+        starts = predicted.points[previous_bounds[:-1]]
+        current = resample_kernel(Polylines(outlines, outline_bounds), spacing, starts)
     else:
-        current, current_bounds = gather(contours, contour_bounds, contacts)
+        contours, contour_bounds = gather(frame.contours.points, frame.contours.bounds, contacts)
+        current = Polylines(contours, contour_bounds)
     # The farthest any point of a contact moved: its centroid's step plus the turn's
     # arc at its farthest point.
-    reach = reach_from(after, current, current_bounds)
+    reach = reach_from(after, current)
     travel = np.empty(len(contacts))
     for k in range(len(contacts)):
-        step = np.hypot(after[k, 0] - before[k, 0], after[k, 1] - before[k, 1])
-        travel[k] = step + abs(turn) * reach[k]
+        step = np.hypot(after[k, 0] - motion.before[k, 0], after[k, 1] - motion.before[k, 1])
+        travel[k] = step + abs(motion.turn) * reach[k]
     return _Plan(
-        follows, ended_rows, turn, contacts, ids[contacts], after, continued, previous_rows,
-        previous_bounds, predicted, current, current_bounds, travel,
+        follows, ended_rows, contacts, ids[contacts], continued, motion, previous_rows,
+        predicted, current, travel,
     )  # fmt: skip
 
 
@@ -543,22 +550,15 @@ def _alpha_beta(
 
 
 @njit
-def _carry(
-    points: NDArray[np.float64],
-    bounds: NDArray[np.intp],
-    before: NDArray[np.float64],
-    after: NDArray[np.float64],
-    turn: float,
-) -> NDArray[np.float64]:
-    """Each contact's points (``points[bounds[k]:bounds[k + 1]]``) moved rigidly with
-    it: turned by ``turn`` about its centroid ``before[k]`` and carried to
-    ``after[k]``."""
-    carried = np.empty_like(points)
-    cos, sin = np.cos(turn), np.sin(turn)
-    for k in range(len(bounds) - 1):
-        for i in range(bounds[k], bounds[k + 1]):
-            x = points[i, 0] - before[k, 0]
-            y = points[i, 1] - before[k, 1]
+def _carry(points: Polylines, motion: _Motion) -> NDArray[np.float64]:
+    """Each contact's points (set k of ``points``) moved rigidly with it (``motion``)."""
+    carried = np.empty_like(points.points)
+    cos, sin = np.cos(motion.turn), np.sin(motion.turn)
+    before, after = motion.before, motion.after
+    for k in range(len(points.bounds) - 1):
+        for i in range(points.bounds[k], points.bounds[k + 1]):
+            x = points.points[i, 0] - before[k, 0]
+            y = points.points[i, 1] - before[k, 1]
             carried[i, 0] = (x * cos - y * sin) + after[k, 0]
             carried[i, 1] = (x * sin + y * cos) + after[k, 1]
     return carried
@@ -566,20 +566,17 @@ def _carry(
 
 @njit
 def _smooth_points(
-    previous: NDArray[np.float64],
-    previous_bounds: NDArray[np.intp],
-    before: NDArray[np.float64],
-    after: NDArray[np.float64],
-    turn: float,
+    previous: Polylines,
+    motion: _Motion,
     measured: NDArray[np.float64],
     predecessor: NDArray[np.intp],
     alpha: float,
 ) -> NDArray[np.float64]:
-    """Each followed point carried rigidly by its contact's smoothed motion (from
-    ``before`` to ``after``, turned by ``turn``), then moved the share ``alpha`` of
-    the way to where it is measured: the contact's shape follows the contour slowly,
-    its motion at once. New points stay where they are measured."""
-    carried = _carry(previous, previous_bounds, before, after, turn)
+    """Each followed point carried rigidly by its contact's smoothed motion, then
+    moved the share ``alpha`` of the way to where it is measured: the contact's shape
+    follows the contour slowly, its motion at once. New points stay where they are
+    measured."""
+    carried = _carry(previous, motion)
     points = measured.copy()
     for j in range(len(predecessor)):
         p = predecessor[j]

@@ -24,6 +24,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from graspenv.geometry import Polylines, bounds_of
 from graspenv.jit import njit
 from graspenv.surface.geometry import Surface
 from graspenv.surface.hand import Hand
@@ -85,16 +86,10 @@ def _on_table(shapes: list[ContactShape], surface: Surface) -> list[ContactShape
 
 @njit
 def _inset_polygons(
-    pixels: NDArray[np.float64],
-    counts: NDArray[np.intp],
-    distance: float,
-    margin: int,
-    width: int,
-    height: int,
-    scale: float,
+    outlines: Polylines, distance: float, margin: int, width: int, height: int, scale: float
 ) -> tuple[NDArray[np.int32], NDArray[np.intp], NDArray[np.int64]]:
-    """Every shape's outline (pixels (column, row), laid end to end, ``counts[i]``
-    vertices each) moved inward by ``distance`` (miter joins), in fixed point.
+    """Every shape's outline (pixels (column, row)) moved inward by ``distance``
+    (miter joins), in fixed point.
 
     A vertex that coincides (to 1e-6 px) with the next has no edge normal, so it is
     dropped first (the inset would leave its corner put), and outlines of fewer than
@@ -107,9 +102,8 @@ def _inset_polygons(
         and each region (c0, r0, c1, r1) on the image with ``margin`` pixels around
         the polygon, -1 rows for polygons not drawn.
     """
-    count = len(counts)
-    starts = np.zeros(count + 1, np.intp)
-    starts[1:] = np.cumsum(counts)
+    pixels, starts = outlines
+    count = len(starts) - 1
     keep = np.zeros(len(pixels), np.bool_)
     sizes = np.zeros(count, np.intp)
     for c in range(count):
@@ -188,12 +182,14 @@ def _draw(
         return image
     max_segment = _MAX_SEGMENT_PX * float(surface.pixel_size.min())
     outlines = [shape.outline(max_segment) for shape in shapes]
-    counts = np.array([len(outline) for outline in outlines], dtype=np.intp)
     # One conversion and one compiled inset for all shapes: per-call overhead
     # dominates here.
-    pixels = surface.world_to_pixel(np.concatenate(outlines))
+    in_pixels = Polylines(
+        surface.world_to_pixel(np.concatenate(outlines)),
+        bounds_of([len(outline) for outline in outlines]),
+    )
     polygons, bounds, boxes = _inset_polygons(
-        pixels, counts, AA_EDGE_BIAS, _MARGIN, width, height, float(1 << _SHIFT)
+        in_pixels, AA_EDGE_BIAS, _MARGIN, width, height, float(1 << _SHIFT)
     )
     for i, (c0, r0, c1, r1) in enumerate(boxes.tolist()):
         if c0 < 0:

@@ -18,7 +18,7 @@ limit in :mod:`graspenv.tasks.slip`; this module gathers them into
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -72,6 +72,25 @@ class ContactArrays(Protocol):
     def distance(self) -> NDArray[np.float64]:
         """Signed separation, metres (negative: penetration), shape (K,)."""
         ...
+
+
+class _Touches(NamedTuple):
+    """The rows of a contact report where a particle touches the object, as
+    :func:`_merge_contacts` reads them: K rows.
+
+    Attributes:
+        particle: the particle's id, shape (K,).
+        position: the contact point, metres, world frame, (K, 3).
+        normal: the unit normal into the object, (K, 3).
+        normal_force: newtons, (K,).
+        velocity: the particle's planar velocity, m/s, (K, 2).
+    """
+
+    particle: NDArray[np.int64]
+    position: NDArray[np.float64]
+    normal: NDArray[np.float64]
+    normal_force: NDArray[np.float64]
+    velocity: NDArray[np.float64]
 
 
 @dataclass(frozen=True)
@@ -200,14 +219,14 @@ def grasp_metrics(
             penetration=penetration,
         )
 
-    points, fingers, normals, side = _merge_contacts(
+    touches = _Touches(
         particle[touching],
         np.ascontiguousarray(position[touching]),
         np.ascontiguousarray(normal[touching]),
         normal_force[touching],
         np.ascontiguousarray(velocity_rows[touching]),
-        float(min_horizontal_normal),
     )
+    points, fingers, normals, side = _merge_contacts(touches, float(min_horizontal_normal))
     slip = planar_slip(centre, planar_velocity, points[:, :2], fingers)
     epsilon = ferrari_canny(
         points[side, :2],
@@ -230,12 +249,7 @@ def grasp_metrics(
 
 @njit
 def _merge_contacts(
-    particle: NDArray[np.int64],
-    position: NDArray[np.float64],
-    normal: NDArray[np.float64],
-    normal_force: NDArray[np.float64],
-    velocity: NDArray[np.float64],
-    min_horizontal_normal: float,
+    touches: _Touches, min_horizontal_normal: float
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
     """One contact per touching particle (:func:`grasp_metrics`), in increasing id.
 
@@ -244,6 +258,7 @@ def _merge_contacts(
         particle velocity (K, 2) and normal (K, 3, not normalised) of each particle's
         rows, and whether it is a side contact (K,).
     """
+    particle, position, normal, normal_force, velocity = touches
     ids = np.unique(particle)
     row_of = np.searchsorted(ids, particle)
     # Weights fall back to 1 for a particle touching without force, so that it still

@@ -11,8 +11,7 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from types import TracebackType
-from typing import Any
+from typing import Any, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,9 +19,10 @@ from numpy.typing import ArrayLike, NDArray
 from graspenv.config import FIDELITY_PRESETS, SceneConfig, load_config, resolve_fidelity
 from graspenv.contacts.extract import validate_mask
 from graspenv.contacts.tracking import ContactFrame, ContactTracker
-from graspenv.physics.world import ContactReport, PhysicsWorld
+from graspenv.physics.world import ContactReport, ObjectStateChange, PhysicsWorld
 from graspenv.proxies import PersistentProxies, RigidProxies, make_proxies
 from graspenv.proxies.base import ProxyCommand
+from graspenv.resources import Closeable
 from graspenv.surface.geometry import Surface
 
 __all__ = ["FrameReport", "Simulation", "make_simulation"]
@@ -67,7 +67,7 @@ class FrameReport:
         return float(sum(self.timings.values()))
 
 
-class Simulation:
+class Simulation(Closeable):
     """A touch table, its tracked contacts, their proxies and a PyBullet scene.
 
     Args:
@@ -211,26 +211,16 @@ class Simulation:
         """
         self._world.apply_force(name, force, height)
 
-    def set_object_state(
-        self,
-        name: str,
-        position: ArrayLike | None = None,
-        yaw: float | None = None,
-        linear_velocity: ArrayLike | None = None,
-        angular_velocity: ArrayLike | None = None,
-        *,
-        rolling: bool = False,
-    ) -> None:
-        """Move an object and/or set its velocity now; ``None`` keeps the current value.
+    def set_object_state(self, name: str, **change: Unpack[ObjectStateChange]) -> None:
+        """Move an object and/or set its velocity now; what is not given keeps its
+        current value.
 
-        Position in metres ((3,), or (x, y) to rest it on the table), yaw in
-        radians, velocities in m/s and rad/s, all world frame; ``rolling=True``
-        spins a sphere to roll at its linear velocity. See
-        :meth:`graspenv.physics.world.PhysicsWorld.set_object_state`.
+        Position in metres ((3,), or (x, y) to rest it on the table), ``yaw`` in
+        radians or any ``orientation`` (quaternion x, y, z, w), velocities in m/s and
+        rad/s, all world frame; ``rolling=True`` spins a sphere to roll at its linear
+        velocity. See :meth:`graspenv.physics.world.PhysicsWorld.set_object_state`.
         """
-        self._world.set_object_state(
-            name, position, yaw, linear_velocity, angular_velocity, rolling=rolling
-        )
+        self._world.set_object_state(name, **change)
 
     # -- pictures ----------------------------------------------------------------------
 
@@ -308,17 +298,6 @@ class Simulation:
     def close(self) -> None:
         """Free the physics client; safe to call twice."""
         self._world.close()
-
-    def __enter__(self) -> Simulation:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.close()
 
 
 def make_simulation(

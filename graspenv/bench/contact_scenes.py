@@ -11,52 +11,53 @@ from graspenv.contacts.extract import find_components
 from graspenv.contacts.resample import orient_ccw, resample_closed
 from graspenv.surface.geometry import Surface
 
+#: How :func:`ellipse_mask` can fill an ellipse.
+RASTERISERS = ("centres", "cv2.ellipse")
 
-def ellipse_mask_exact(
+
+def ellipse_mask(
     shape: tuple[int, int],
     centre_px: NDArray[np.float64],
     axes_px: tuple[float, float],
     angle: float,
-) -> NDArray[np.bool_]:
-    """Pixels whose centres lie inside an ellipse (pixel-centre sampling).
+    rasteriser: str = "centres",
+) -> NDArray[np.uint8]:
+    """A filled ellipse as a 0/1 mask.
 
     Args:
         shape: mask (H, W).
         centre_px: pixels (column, row), shape (2,).
         axes_px: semi-axes, pixels.
         angle: rotation of the first axis from the column axis, radians (towards rows).
+        rasteriser: ``"centres"``: the pixels whose centres lie inside (exact
+            pixel-centre sampling); ``"cv2.ellipse"``: filled by OpenCV with 8
+            fractional bits.
     """
+    if rasteriser == "cv2.ellipse":
+        mask = np.zeros(shape, np.uint8)
+        scale = 256.0
+        cv2.ellipse(
+            mask,
+            (round(centre_px[0] * scale), round(centre_px[1] * scale)),
+            (round(axes_px[0] * scale), round(axes_px[1] * scale)),
+            float(np.degrees(angle)),
+            0.0,
+            360.0,
+            1,
+            thickness=-1,
+            lineType=cv2.LINE_8,
+            shift=8,
+        )
+        return mask
+    if rasteriser != "centres":
+        raise ValueError(f"rasteriser must be one of {RASTERISERS}, got {rasteriser!r}")
     rows, cols = np.mgrid[0 : shape[0], 0 : shape[1]]
     dx = cols - centre_px[0]
     dy = rows - centre_px[1]
     c, s = np.cos(angle), np.sin(angle)
     u = (c * dx + s * dy) / axes_px[0]
     v = (-s * dx + c * dy) / axes_px[1]
-    return np.asarray(u * u + v * v <= 1.0)
-
-
-def ellipse_mask_cv2(
-    shape: tuple[int, int],
-    centre_px: NDArray[np.float64],
-    axes_px: tuple[float, float],
-    angle: float,
-) -> NDArray[np.uint8]:
-    """The same ellipse filled by ``cv2.ellipse`` with 8 fractional bits."""
-    mask = np.zeros(shape, np.uint8)
-    scale = 256.0
-    cv2.ellipse(
-        mask,
-        (round(centre_px[0] * scale), round(centre_px[1] * scale)),
-        (round(axes_px[0] * scale), round(axes_px[1] * scale)),
-        float(np.degrees(angle)),
-        0.0,
-        360.0,
-        1,
-        thickness=-1,
-        lineType=cv2.LINE_8,
-        shift=8,
-    )
-    return mask
+    return (u * u + v * v <= 1.0).astype(np.uint8)
 
 
 def ellipse_signed_distance(

@@ -10,11 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from graspenv.bench.contact_scenes import (
-    ellipse_mask_cv2,
-    ellipse_mask_exact,
-    ellipse_signed_distance,
-)
+from graspenv.bench.contact_scenes import RASTERISERS, ellipse_mask, ellipse_signed_distance
 from graspenv.contacts.extract import find_components
 
 
@@ -33,11 +29,8 @@ def main(count: int = 400, seed: int = 0) -> None:
         angle = float(rng.uniform(0.0, np.pi))
         h = ((axes[0] - axes[1]) / (axes[0] + axes[1])) ** 2
         perimeter = np.pi * (axes[0] + axes[1]) * (1 + 3 * h / (10 + np.sqrt(4 - 3 * h)))
-        for render, mask in (
-            ("centres", ellipse_mask_exact(shape, centre, axes, angle).astype(np.uint8)),
-            ("cv2.ellipse", ellipse_mask_cv2(shape, centre, axes, angle)),
-        ):
-            (component,) = find_components(mask)
+        for render in RASTERISERS:
+            (component,) = find_components(ellipse_mask(shape, centre, axes, angle, render))
             for name, poly in (("traced", component.chain), ("offset", component.outline)):
                 pts = _with_midpoints(np.asarray(poly, dtype=float))
                 d = ellipse_signed_distance(pts, centre, axes, angle)

@@ -38,7 +38,7 @@ from __future__ import annotations
 import contextlib
 import itertools
 import math
-from types import TracebackType
+from typing import TypedDict
 
 import numpy as np
 import pybullet as pb
@@ -59,11 +59,13 @@ from graspenv.physics.reports import (
 )
 from graspenv.physics.rigid import RigidBodies
 from graspenv.physics.stepping import FrameStepper
+from graspenv.resources import Closeable
 
 __all__ = [
     "EDGE_RADIUS",
     "ContactReport",
     "FootprintHits",
+    "ObjectStateChange",
     "ObjectStates",
     "PhysicsWorld",
     "RayHits",
@@ -77,7 +79,19 @@ _NEAR = 0.01
 _FAR_BEYOND_TARGET = 10.0
 
 
-class PhysicsWorld:
+class ObjectStateChange(TypedDict, total=False):
+    """The keywords of :meth:`PhysicsWorld.set_object_state`, for callers that pass
+    them on (``Simulation.set_object_state``); each is described there."""
+
+    position: ArrayLike | None
+    yaw: float | None
+    linear_velocity: ArrayLike | None
+    angular_velocity: ArrayLike | None
+    rolling: bool
+    orientation: ArrayLike | None
+
+
+class PhysicsWorld(Closeable):
     """A table, its objects and a pool of particle proxies in a PyBullet DIRECT client.
 
     Args:
@@ -156,17 +170,6 @@ class PhysicsWorld:
         if self._client is not None:
             pb.disconnect(physicsClientId=self._client)
             self._client = None
-
-    def __enter__(self) -> PhysicsWorld:
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        traceback: TracebackType | None,
-    ) -> None:
-        self.close()
 
     def __del__(self) -> None:
         # A forgotten world must not keep its client (and its memory) alive; at

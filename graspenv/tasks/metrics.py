@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from graspenv.geometry import tilt_angle
 from graspenv.jit import njit
-from graspenv.tasks.quality import ferrari_canny, force_closure
+from graspenv.tasks.quality import ferrari_canny
 from graspenv.tasks.slip import coulomb_slip_force, planar_slip, rigid_velocity_at
 
 __all__ = [
@@ -33,7 +33,6 @@ __all__ = [
     "GraspMetrics",
     "coulomb_slip_force",
     "ferrari_canny",
-    "force_closure",
     "grasp_metrics",
     "planar_slip",
     "rigid_velocity_at",
@@ -102,7 +101,7 @@ class GraspMetrics:
             newtons (both sides of a squeeze, and particles pressing from above).
         n_contacts: number of distinct particles touching the object.
         force_closure: whether the particles' side contacts hold the object in force
-            closure in the table plane (``epsilon > closure_tolerance``).
+            closure in the table plane (``epsilon > 0``).
         epsilon: planar Ferrari–Canny quality of those contacts, dimensionless
             (force per unit total normal force), >= 0; see :func:`ferrari_canny`.
         slip: speed of the object's centre relative to the best-fit rigid planar
@@ -143,9 +142,6 @@ def grasp_metrics(
     particle_velocities: ArrayLike,
     mu: float,
     *,
-    torque_scale: float | None = None,
-    cone_edges: int = 2,
-    closure_tolerance: float = 0.0,
     min_horizontal_normal: float = 0.5,
 ) -> GraspMetrics:
     """Grip force, force closure, slip, tilt and penetration of one object.
@@ -179,10 +175,6 @@ def grasp_metrics(
             is accepted too.
         mu: particle–object friction coefficient (Bullet combines the two bodies'
             coefficients as their product), >= 0.
-        torque_scale: ρ for :func:`ferrari_canny`, metres; None: the farthest side
-            contact from the centre.
-        cone_edges: forces sampled per friction cone, see :func:`ferrari_canny`.
-        closure_tolerance: least epsilon counted as force closure.
         min_horizontal_normal: side-contact threshold on the horizontal length of the
             unit normal, in [0, 1] (0.5: at most 60° from the table plane).
 
@@ -228,18 +220,11 @@ def grasp_metrics(
     )
     points, fingers, normals, side = _merge_contacts(touches, float(min_horizontal_normal))
     slip = planar_slip(centre, planar_velocity, points[:, :2], fingers)
-    epsilon = ferrari_canny(
-        points[side, :2],
-        normals[side, :2],
-        mu,
-        centre,
-        torque_scale=torque_scale,
-        cone_edges=cone_edges,
-    )
+    epsilon = ferrari_canny(points[side, :2], normals[side, :2], mu, centre)
     return GraspMetrics(
         grip_force=grip_force,
         n_contacts=len(points),
-        force_closure=epsilon > closure_tolerance,
+        force_closure=epsilon > 0.0,
         epsilon=epsilon,
         slip=slip,
         tilt=tilt,

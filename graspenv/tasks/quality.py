@@ -48,7 +48,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from graspenv.jit import njit
 
-__all__ = ["ferrari_canny", "force_closure"]
+__all__ = ["ferrari_canny"]
 
 # Relative to the largest wrench coordinate (about 1 with the default torque scale).
 _RELATIVE_TOLERANCE = 1e-9
@@ -60,7 +60,6 @@ def ferrari_canny(
     mu: float,
     centre: ArrayLike,
     torque_scale: float | None = None,
-    cone_edges: int = 2,
 ) -> float:
     """Planar Ferrari–Canny epsilon (L1 quality) of a set of frictional point contacts.
 
@@ -79,57 +78,18 @@ def ferrari_canny(
         torque_scale: ρ, metres, > 0; torques are divided by it. None: the largest
             distance of a contact point from ``centre`` (so the value does not
             change when the whole grasp is scaled).
-        cone_edges: forces sampled across each friction cone, ``n + μ s t`` for s
-            evenly spaced in [-1, 1], >= 2. In the plane the two edges span the cone
-            exactly and wrenches are linear in the force, so more samples lie inside
-            the hull and leave epsilon unchanged; the parameter keeps the interface of
-            3-D cone discretisations.
-
     Returns:
         Epsilon, dimensionless, >= 0; 0 without force closure, with fewer than two
         contacts, or for a wrench set flatter than the tolerance (1e-9 relative).
 
     Raises:
         ValueError: on mismatched shapes, a zero normal, ``mu < 0``,
-            ``torque_scale <= 0`` or ``cone_edges < 2``.
+            ``torque_scale <= 0``.
     """
-    wrenches = _primitive_wrenches(points, normals, mu, centre, torque_scale, cone_edges)
+    wrenches = _primitive_wrenches(points, normals, mu, centre, torque_scale)
     if wrenches is None:
         return 0.0
     return _epsilon_of_wrenches(wrenches)
-
-
-def force_closure(
-    points: ArrayLike,
-    normals: ArrayLike,
-    mu: float,
-    centre: ArrayLike,
-    torque_scale: float | None = None,
-    cone_edges: int = 2,
-    tolerance: float = 0.0,
-) -> bool:
-    """Whether planar frictional contacts hold an object in force closure.
-
-    Force closure means the contacts can resist any planar wrench: the origin is
-    strictly inside the convex hull of their primitive wrenches, i.e.
-    :func:`ferrari_canny` is positive.
-
-    Args:
-        points: contact points, metres, shape (K, 2).
-        normals: contact normals pointing into the object, shape (K, 2).
-        mu: Coulomb friction coefficient, >= 0.
-        centre: the point torques are taken about, metres, shape (2,).
-        torque_scale: ρ, metres; see :func:`ferrari_canny`.
-        cone_edges: forces sampled per friction cone; see :func:`ferrari_canny`.
-        tolerance: the least epsilon counted as closure (epsilon must exceed it).
-            0 (the default) already excludes configurations within floating-point
-            tolerance of the boundary, which :func:`ferrari_canny` reports as 0; pass a
-            positive margin for grasps that must survive noise.
-
-    Returns:
-        ``ferrari_canny(...) > tolerance``.
-    """
-    return ferrari_canny(points, normals, mu, centre, torque_scale, cone_edges) > tolerance
 
 
 def _primitive_wrenches(
@@ -138,11 +98,15 @@ def _primitive_wrenches(
     mu: float,
     centre: ArrayLike,
     torque_scale: float | None,
-    cone_edges: int,
+    cone_edges: int = 2,
 ) -> NDArray[np.float64] | None:
     """Wrenches ``(f_x, f_y, τ/ρ)`` of every friction-cone sample, shape (K·E, 3).
 
-    None when there are fewer than two contacts (never force closure).
+    ``cone_edges`` forces are sampled across each cone, ``n + μ s t`` for s evenly
+    spaced in [-1, 1], >= 2. In the plane the two edges span the cone exactly and
+    wrenches are linear in the force, so more samples lie inside the hull and leave
+    epsilon unchanged (tests/tasks/test_metrics.py checks it); :func:`ferrari_canny`
+    uses two. None when there are fewer than two contacts (never force closure).
     """
     p = np.asarray(points, dtype=float)
     n = np.asarray(normals, dtype=float)

@@ -145,7 +145,9 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
 
     - v0: first release. 2026-12-03: CatchBall succeeds on a catch (the ball held
       still in force closure for `hold_steps`), not on the ball stopping; its goal
-      vector gained the hold.
+      vector gained the hold. 2026-12-04: SqueezeHold's hand starts 15 mm off the
+      box's faces (``task.clearance``) and the push peaks at 1.5-3 N, above what
+      the table's friction alone holds, so a still hand no longer holds the box.
     """
 
     metadata: dict[str, Any] = {  # noqa: RUF012  (Gymnasium's own convention)

@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from graspenv.config import PhysicsConfig
 from graspenv.tasks.base import DISTURBANCE_DRAWS, EpisodeState, Task, TaskConfig, TaskEpisode
 from graspenv.tasks.library import (
     TASKS,
@@ -57,7 +58,7 @@ def test_each_task_has_only_its_own_settings() -> None:
         assert isinstance(task.default_config, task.config_type), name
         own = {f.name for f in dataclasses.fields(task.config_type)} - shared
         assert own == {
-            "SqueezeHold": {"hold_steps", "settle_steps", "force"},
+            "SqueezeHold": {"hold_steps", "settle_steps", "force", "clearance"},
             "CatchBall": {"ball_speed", "hold_steps"},
         }.get(name, set()), name
 
@@ -73,6 +74,8 @@ def test_a_task_refuses_another_tasks_configuration() -> None:
         (dict(force=(2.0, 1.0)), r"task\.force"),
         (dict(hold_steps=0), r"task\.hold_steps"),
         (dict(settle_steps=-1), r"task\.settle_steps"),
+        (dict(clearance=-0.001), r"task\.clearance"),
+        (dict(clearance=math.nan), r"task\.clearance"),
     ],
 )
 def test_bad_hold_settings_name_the_key(config: dict[str, object], message: str) -> None:
@@ -117,6 +120,21 @@ def test_only_catch_ball_starts_the_object_moving() -> None:
             assert start.linear_velocity[0] > 0.0
         else:
             assert start.linear_velocity is None, name
+
+
+def test_the_hold_starts_open_and_pushes_harder_than_the_table_holds() -> None:
+    # A still hand must not hold the box: the fingertips start clear of its faces,
+    # and every push peaks above the table's friction on the heaviest, grippiest box
+    # the task draws (combined friction is the product of the two coefficients).
+    task = SqueezeHold()
+    cfg = task.config
+    rng = np.random.default_rng(3)
+    obj = task.draw_object(rng)
+    grip = task.start_grip(rng, obj, task.draw_goal(rng, obj))
+    assert grip.opening == pytest.approx(obj.size[0] + 2 * cfg.clearance)
+    assert cfg.clearance > cfg.position_tolerance
+    table = PhysicsConfig().table_friction
+    assert min(cfg.force) > max(cfg.friction) * table * max(cfg.mass) * 9.81
 
 
 def test_the_hold_disturbance_ramps_between_settle_and_hold() -> None:

@@ -19,12 +19,17 @@ In z, a bottom particle resting on an object is pressed down by ``proxy.down_for
 (a finger's press on its top; its weight is cancelled, so the press does not depend
 on its mass), one on the table by the press scaled with the particle's mass
 (:attr:`SceneConfig.particle_scale`: a full press beside a 5 g box drags it, 10° short
-on a 90° turn, docs/design.md, section 3b), and, if it rises above the
-surface under it (rays once per frame), pulled back by the same law: friction cannot
-hold a bottom particle down (it is planar), and a squeezed face tilted by a degree
-pushes it up harder than the press, so without the pull it could be squirted up a
-face or wedged under an edge. A particle in layer l > 0 of a stack is driven the same
-way to ``proxy.stack_spacing · l`` above its bottom particle.
+on a 90° turn, docs/design.md, section 3b), and, if it rises above the surface
+under it, pulled back by the same law: friction cannot hold a bottom particle down
+(it is planar), and a squeezed face tilted by a degree pushes it up harder than the
+press, so without the pull it could be squirted up a face or wedged under an edge.
+The surface is measured by rays once a frame, where the particle starts it, and
+followed along its slope as the particle moves (:class:`SupportPlanes`); the pull
+is no faster than ``physics.substep_travel`` a sub-step. Without either, a particle
+climbing a ball's shoulder, or put down on a steeply tilted face, was yanked into
+the surface by the stale height (docs/design.md, section 3b). A particle in layer
+l > 0 of a stack is driven the same way to ``proxy.stack_spacing · l`` above its
+bottom particle.
 
 The law is applied as a velocity (``F·h/m`` added to the particle's velocity before
 Bullet's step), so each sub-step costs one PyBullet call per particle to set it and
@@ -49,6 +54,7 @@ __all__ = [
     "DriveLaw",
     "ParticleDrive",
     "Stacks",
+    "SupportPlanes",
     "TargetPaths",
     "drive_velocities",
     "frame_substeps",
@@ -120,6 +126,23 @@ class Stacks(NamedTuple):
         )
 
 
+class SupportPlanes(NamedTuple):
+    """What each bottom particle rests on this frame, one row per bottom particle.
+
+    Attributes:
+        rest_z: its resting height (the support under its disc plus its radius),
+            metres, (B,).
+        at: where that was measured (its centre at the frame's start), metres,
+            (B, 2).
+        slope: the support's slope there (dz/dx, dz/dy), (B, 2); 0 on the table,
+            a level top or an edge (``RayCaster.support_planes``).
+    """
+
+    rest_z: NDArray[np.float64]
+    at: NDArray[np.float64]
+    slope: NDArray[np.float64]
+
+
 class DriveLaw(NamedTuple):
     """The constants of Wilson's law a frame's sub-steps share (module docstring).
 
@@ -130,6 +153,8 @@ class DriveLaw(NamedTuple):
         dv_max: the velocity change a sub-step's force limit allows, m/s.
         lift_dv: gravity's velocity change over a sub-step, m/s (an upper particle's
             weight is cancelled).
+        pull_max: the fastest a bottom particle is pulled down to its support, m/s:
+            ``physics.substep_travel`` a sub-step.
     """
 
     tau: float
@@ -137,6 +162,7 @@ class DriveLaw(NamedTuple):
     v_max: float
     dv_max: float
     lift_dv: float
+    pull_max: float
 
 
 class ParticleDrive(NamedTuple):
@@ -201,6 +227,7 @@ class ParticleDrive(NamedTuple):
                 v_max=physics.max_particle_speed,
                 dv_max=physics.max_particle_force * h / mass,
                 lift_dv=physics.gravity * h,
+                pull_max=physics.substep_travel / h,
             ),
             substeps=substeps,
             # Bullet adds g·h itself; the weight is cancelled and the press applied.
@@ -229,13 +256,13 @@ class ParticleDrive(NamedTuple):
         substep: int,
         position: NDArray[np.float64],
         velocity: NDArray[np.float64],
-        rest_z: NDArray[np.float64],
+        rest: SupportPlanes,
         press: NDArray[np.float64],
     ) -> NDArray[np.float64]:
         """The velocities to set before sub-step ``substep`` (1..S), m/s, (K·L, 3),
         from the particles' positions and velocities now, the bottom particles'
-        resting heights (metres) and their presses (:meth:`presses`), one per bottom
-        particle in row order."""
+        supports and their presses (:meth:`presses`), one per bottom particle in row
+        order."""
         # The kernel takes the bundles' arrays one by one: it runs every sub-step, and
         # numba types a NamedTuple argument in Python at each call (about a
         # microsecond), plain arrays in C.
@@ -245,7 +272,7 @@ class ParticleDrive(NamedTuple):
             *self.targets,
             substep / self.substeps,
             *self.stacks,
-            rest_z,
+            *rest,
             press,
             *self.law,
         )
@@ -263,16 +290,19 @@ def drive_velocities(
     bottom_of: NDArray[np.intp],
     rise: NDArray[np.float64],
     rest_z: NDArray[np.float64],
+    rest_xy: NDArray[np.float64],
+    rest_slope: NDArray[np.float64],
     press_dv: NDArray[np.float64],
     tau: float,
     gain: float,
     v_max: float,
     dv_max: float,
     lift_dv: float,
+    pull_max: float,
 ) -> NDArray[np.float64]:
     """One sub-step of the law (module docstring) for every particle: the velocity
     to set, m/s, (n, 3), from the particles' states now, the frame's targets, stacks
-    and law, and the bottom particles' resting heights and presses
+    and law, and the bottom particles' supports (:class:`SupportPlanes`) and presses
     (:meth:`ParticleDrive.velocities`). ``fraction`` is how far through the frame the
     sub-step ends."""
     n = len(position)
@@ -297,10 +327,17 @@ def drive_velocities(
     for i in range(n):
         if is_bottom[i]:
             new[i, 2] += press_dv[bottom]
-            # A bottom particle that rose above its support is pulled back.
-            excess = position[i, 2] - rest_z[bottom] - REST_TOLERANCE
+            # A bottom particle that rose above its support is pulled back; the
+            # support followed along its slope from where the frame measured it.
+            support = (
+                rest_z[bottom]
+                + rest_slope[bottom, 0] * (position[i, 0] - rest_xy[bottom, 0])
+                + rest_slope[bottom, 1] * (position[i, 1] - rest_xy[bottom, 1])
+            )
+            excess = position[i, 2] - support - REST_TOLERANCE
             if excess > 0.0:
-                new[i, 2] += min(max(gain * (-excess / tau - velocity[i, 2]), -dv_max), 0.0)
+                pull = -min(excess / tau, pull_max)
+                new[i, 2] += min(max(gain * (pull - velocity[i, 2]), -dv_max), 0.0)
             bottom += 1
         else:
             z_goal = position[bottom_of[upper], 2] + rise[upper]

@@ -21,7 +21,7 @@ from graspenv.physics.bodies import SceneBodies
 from graspenv.physics.pool import OBJECT_GROUP, STATIC_GROUP
 from graspenv.physics.reports import RayHits
 
-__all__ = ["SUPPORT_CLEARANCE", "RayCaster"]
+__all__ = ["MIN_SLOPE", "SUPPORT_CLEARANCE", "RayCaster"]
 
 _RAY_BATCH = 8192
 #: A bottom particle rests on a surface that its rays meet at least this many radii
@@ -33,6 +33,10 @@ _RAY_BATCH = 8192
 #: A particle on a top face's edge meets the face 0.44 radius below its centre or
 #: lower.
 SUPPORT_CLEARANCE = 0.1
+#: A support tilted less than this (dz per metre across) is taken as level: over the
+#: few millimetres a particle crosses in a frame it rises by less than the
+#: tolerance it may sit above its support (``REST_TOLERANCE``, 0.2 mm, over 4 mm).
+MIN_SLOPE = 0.05
 # Rays start this far above the highest point any object could reach while resting.
 _RAY_CLEARANCE = 0.5
 
@@ -123,15 +127,47 @@ class RayCaster:
             points: where the rays start from, metres, world frame, shape (n, 3).
             clearance: metres.
         """
+        return self.support_planes(points, clearance)[0]
+
+    def support_planes(
+        self, points: NDArray[np.float64], clearance: float = 0.0
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`support_heights` and the slope of the surface under each disc.
+
+        The slope (dz/dx, dz/dy) is the difference of the opposite rays' heights
+        over the disc's width where all five rays meet the same object and it tilts
+        by more than :data:`MIN_SLOPE`; elsewhere (the table, an edge, a flat top) it
+        is 0. Every object is convex, so the plane through the highest hit with that
+        slope lies on or above the surface along a particle's path across it: a
+        support followed along the plane is never inside the object.
+
+        Args:
+            points: where the rays start from, metres, world frame, shape (n, 3).
+            clearance: metres.
+
+        Returns:
+            Heights, metres, (n,), and slopes, (n, 2).
+        """
         n = points.shape[0]
         if n == 0:
-            return np.zeros(0)
+            return np.zeros(0), np.zeros((0, 2))
         starts = (points[:, None, :] + self._disc_offsets[None, :, :]).reshape(-1, 3)
         ends = starts.copy()
         ends[:, 2] = -1e-3
         height = np.zeros(starts.shape[0])
+        body = np.full(starts.shape[0], -1, dtype=np.int64)
         table = self._bodies.table
         for i, hit in self._cast(starts, ends):
             if hit[0] >= 0 and hit[0] != table and hit[3][2] <= starts[i, 2] - clearance:
                 height[i] = hit[3][2]
-        return height.reshape(n, -1).max(axis=1)
+                body[i] = hit[0]
+        height = height.reshape(n, -1)
+        body = body.reshape(n, -1)
+        width = self._disc_offsets[1, 0] - self._disc_offsets[2, 0]
+        slope = np.column_stack(
+            [(height[:, 1] - height[:, 2]) / width, (height[:, 3] - height[:, 4]) / width]
+        )
+        one_object = (body[:, 0] >= 0) & np.all(body == body[:, :1], axis=1)
+        tilted = np.hypot(slope[:, 0], slope[:, 1]) > MIN_SLOPE
+        slope[~(one_object & tilted)] = 0.0
+        return height.max(axis=1), slope

@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 from graspenv.config import SceneConfig
 from graspenv.geometry import footprint_depths
 from graspenv.physics.bodies import EDGE_RADIUS, build_scene, place_objects
-from graspenv.physics.control import REST_TOLERANCE, ParticleDrive
+from graspenv.physics.control import REST_TOLERANCE, ParticleDrive, SupportPlanes
 from graspenv.physics.pool import ParticlePool
 from graspenv.physics.rays import SUPPORT_CLEARANCE, RayCaster
 from graspenv.physics.reports import (
@@ -687,18 +687,22 @@ class PhysicsWorld(Closeable):
         # Where each bottom particle should rest: on the surface under it (rays from
         # the particle down ignore whatever is above it). One at table level cannot
         # be above its support and needs no ray.
-        bottom_z = x[drive.is_bottom, 2]
-        rest_z = np.full(bottom_z.shape, self.pool.radius)
-        raised = bottom_z > self.pool.radius + REST_TOLERANCE
+        bottoms = x[drive.is_bottom]
+        rest = SupportPlanes(
+            np.full(len(bottoms), self.pool.radius), bottoms[:, :2], np.zeros((len(bottoms), 2))
+        )
+        raised = bottoms[:, 2] > self.pool.radius + REST_TOLERANCE
         if np.any(raised):
-            rest_z[raised] += self._rays.support_heights(
-                x[drive.is_bottom][raised], clearance=SUPPORT_CLEARANCE * self.pool.radius
+            height, slope = self._rays.support_planes(
+                bottoms[raised], clearance=SUPPORT_CLEARANCE * self.pool.radius
             )
+            rest.rest_z[raised] += height
+            rest.slope[raised] = slope
 
-        press = drive.presses(rest_z)
+        press = drive.presses(rest.rest_z)
 
         def drive_particles(substep: int) -> None:
-            velocity = drive.velocities(substep, x, v, rest_z, press)
+            velocity = drive.velocities(substep, x, v, rest, press)
             for body, linear, spin_of in zip(bodies, velocity.tolist(), angular, strict=True):
                 set_velocity(body, linear, spin_of, client)
 

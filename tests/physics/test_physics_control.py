@@ -151,7 +151,7 @@ def test_a_particle_resting_against_a_face_stays_finite(
 
 def test_a_light_scene_scales_the_table_press_but_not_the_press_on_an_object() -> None:
     from graspenv.config import load_config
-    from graspenv.physics.control import ParticleDrive
+    from graspenv.physics.control import ParticleDrive, SupportPlanes
 
     light = load_config(
         None, objects=[{"name": "box", "shape": "box", "size": [0.06, 0.06, 0.03], "mass": 0.005}]
@@ -164,8 +164,8 @@ def test_a_light_scene_scales_the_table_press_but_not_the_press_on_an_object() -
     )
     h = 1 / 240
     position = np.array([[0.0, 0.0, r], [0.0, 0.0, 0.03 + r]])  # on the table, on the box
-    rest_z = np.array([r, 0.03 + r])
-    v = drive.velocities(1, position, np.zeros((2, 3)), rest_z, drive.presses(rest_z))
+    rest = SupportPlanes(np.array([r, 0.03 + r]), position[:, :2], np.zeros((2, 2)))
+    v = drive.velocities(1, position, np.zeros((2, 3)), rest, drive.presses(rest.rest_z))
     g = physics.gravity
     # The press (weight cancelled) as a velocity change: scaled beside the box, the
     # finger's whole 0.05 N on it (0.5 g particles: 2.5 N/kg against 100 N/kg).
@@ -192,3 +192,92 @@ def test_a_frame_gets_the_sub_steps_its_fastest_point_needs() -> None:
     assert frame_substeps(1.0, physics) == 16  # capped
     fixed = PhysicsConfig(substeps=4, max_substeps=2)
     assert frame_substeps(1.0, fixed) == 4  # at or below substeps: a fixed count
+
+
+def _one_bottom_particle(substeps: int = 4) -> tuple[object, float, float]:
+    """The default scene's law for one particle held still at the origin, its
+    radius and its sub-step."""
+    from graspenv.config import load_config
+    from graspenv.physics.control import ParticleDrive
+
+    scene = load_config(None)
+    proxy, physics = scene.particle_settings
+    start = np.zeros((1, 2))
+    drive = ParticleDrive.for_frame(
+        start, start, 1, 1 / 60, substeps, proxy, physics, top_press=scene.proxy.down_force
+    )
+    return drive, proxy.particle_radius, 1 / 60 / substeps
+
+
+def test_a_particle_far_above_its_support_is_pulled_down_a_sub_step_travel_at_most() -> None:
+    from graspenv.config import PhysicsConfig
+    from graspenv.physics.control import SupportPlanes
+
+    drive, r, h = _one_bottom_particle()
+    travel = PhysicsConfig().substep_travel
+    rest = SupportPlanes(np.array([0.03 + r]), np.zeros((1, 2)), np.zeros((1, 2)))
+    press = drive.presses(rest.rest_z)
+    for above, pulled in ((0.0001, False), (0.0004, True), (0.02, True)):
+        position = np.array([[0.0, 0.0, 0.03 + r + above]])
+        v = drive.velocities(1, position, np.zeros((1, 3)), rest, press)
+        pull = v[0, 2] - press[0]  # the press alone on a particle at rest on its support
+        if not pulled:
+            assert pull == 0.0
+            continue
+        # 0.4 mm above: the law's own pull, (0.4 - 0.2) mm over its Δt; 20 mm above
+        # (a support that vanished under it): no faster than 0.5 mm a sub-step.
+        assert pull < 0.0
+        assert -pull <= travel / h + 1e-12
+    assert -pull == pytest.approx(travel / h)
+
+
+def test_the_support_is_followed_along_its_slope() -> None:
+    from graspenv.physics.control import SupportPlanes
+
+    drive, r, _ = _one_bottom_particle()
+    # A face rising 1 in 2 along +x, measured under the particle at x = 0.
+    rest = SupportPlanes(np.array([0.04 + r]), np.zeros((1, 2)), np.array([[0.5, 0.0]]))
+    press = drive.presses(rest.rest_z)
+    # 4 mm uphill the support is 2 mm higher: a particle resting there is not pulled
+    # into the face (measured at x = 0 it would be 2 mm above it).
+    on_face = np.array([[0.004, 0.0, 0.042 + r]])
+    v = drive.velocities(1, on_face, np.zeros((1, 3)), rest, press)
+    assert v[0, 2] == pytest.approx(press[0])
+    # 1 mm above the face there, it is pulled back.
+    above = on_face + np.array([0.0, 0.0, 0.001])
+    assert drive.velocities(1, above, np.zeros((1, 3)), rest, press)[0, 2] < press[0]
+
+
+def test_the_support_plane_of_a_ball_is_its_tangent_and_a_box_top_is_level(
+    make_world: Callable[..., PhysicsWorld],
+) -> None:
+    from graspenv.physics.rays import SUPPORT_CLEARANCE
+
+    radius = 0.04
+    world = make_world(
+        objects=[
+            {"name": "ball", "shape": "sphere", "size": [radius], "position": [0.1, 0.0]},
+            {"name": "box", "shape": "box", "size": [0.06, 0.06, 0.03], "position": [-0.1, 0.0]},
+        ]
+    )
+    r = world.scene.proxy.particle_radius
+    rays = world._rays
+    # On the ball, 15 mm from its top (x) and 5 mm (y): the slope of the sphere there.
+    dx, dy = -0.015, 0.005
+    z = radius + math.sqrt(radius**2 - dx**2 - dy**2)
+    points = np.array(
+        [
+            [0.1 + dx, dy, z + r],  # on the ball's shoulder
+            [-0.1, 0.0, 0.03 + r],  # on the box's level top
+            [-0.1 + 0.03, 0.0, 0.03 + r],  # over the box's edge: rays meet top and table
+        ]
+    )
+    height, slope = rays.support_planes(points, clearance=SUPPORT_CLEARANCE * r)
+    surface = z - radius
+    expected = [-dx / surface, -dy / surface]
+    np.testing.assert_allclose(slope[0], expected, rtol=0.05)
+    # The highest of the disc's rays: the uphill one, 0.9 radius out.
+    uphill = 0.9 * r * math.hypot(*expected)
+    assert z < height[0] <= z + 1.05 * uphill
+    np.testing.assert_array_equal(slope[1:], 0.0)
+    np.testing.assert_allclose(height[1:], 0.03, atol=1e-4)

@@ -55,6 +55,7 @@ class RayCaster:
         self._client = client
         self._bodies = bodies
         ring = 0.9 * particle_radius
+        self._disc_width = 2.0 * ring  # between opposite rays of the ring
         self._disc_offsets = np.array(
             [
                 [0.0, 0.0, 0.0],
@@ -163,10 +164,7 @@ class RayCaster:
                 body[i] = hit[0]
         height = height.reshape(n, -1)
         body = body.reshape(n, -1)
-        width = self._disc_offsets[1, 0] - self._disc_offsets[2, 0]
-        slope = np.column_stack(
-            [(height[:, 1] - height[:, 2]) / width, (height[:, 3] - height[:, 4]) / width]
-        )
+        slope = (height[:, [1, 3]] - height[:, [2, 4]]) / self._disc_width
         one_object = (body[:, 0] >= 0) & np.all(body == body[:, :1], axis=1)
         tilted = np.hypot(slope[:, 0], slope[:, 1]) > MIN_SLOPE
         slope[~(one_object & tilted)] = 0.0

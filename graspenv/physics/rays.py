@@ -55,6 +55,7 @@ class RayCaster:
         self._client = client
         self._bodies = bodies
         ring = 0.9 * particle_radius
+        self._radius = particle_radius
         self._disc_width = 2.0 * ring  # between opposite rays of the ring
         self._disc_offsets = np.array(
             [
@@ -114,7 +115,7 @@ class RayCaster:
         return RayHits(height, hit_object)
 
     def support_heights(
-        self, points: NDArray[np.float64], clearance: float = 0.0
+        self, points: NDArray[np.float64], clearance: float = 0.0, fit_under: bool = False
     ) -> NDArray[np.float64]:
         """Height of the highest surface below each particle's disc (0: table), (n,).
 
@@ -127,11 +128,13 @@ class RayCaster:
         Args:
             points: where the rays start from, metres, world frame, shape (n, 3).
             clearance: metres.
+            fit_under: a particle lowered from above onto the table, beside an
+                object that overhangs it, rests on the table (:meth:`_drop_overhangs`).
         """
-        return self.support_planes(points, clearance)[0]
+        return self.support_planes(points, clearance, fit_under)[0]
 
     def support_planes(
-        self, points: NDArray[np.float64], clearance: float = 0.0
+        self, points: NDArray[np.float64], clearance: float = 0.0, fit_under: bool = False
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """:meth:`support_heights` and the slope of the surface under each disc.
 
@@ -145,6 +148,7 @@ class RayCaster:
         Args:
             points: where the rays start from, metres, world frame, shape (n, 3).
             clearance: metres.
+            fit_under: as for :meth:`support_heights`.
 
         Returns:
             Heights, metres, (n,), and slopes, (n, 2).
@@ -162,6 +166,8 @@ class RayCaster:
             if hit[0] >= 0 and hit[0] != table and hit[3][2] <= starts[i, 2] - clearance:
                 height[i] = hit[3][2]
                 body[i] = hit[0]
+        if fit_under:
+            self._drop_overhangs(starts, height, body)
         height = height.reshape(n, -1)
         body = body.reshape(n, -1)
         slope = (height[:, [1, 3]] - height[:, [2, 4]]) / self._disc_width
@@ -169,3 +175,38 @@ class RayCaster:
         tilted = np.hypot(slope[:, 0], slope[:, 1]) > MIN_SLOPE
         slope[~(one_object & tilted)] = 0.0
         return height.max(axis=1), slope
+
+    def _drop_overhangs(
+        self, starts: NDArray[np.float64], height: NDArray[np.float64], body: NDArray[np.int64]
+    ) -> None:
+        """Forget (in place) the hits of each disc that fits under what they meet.
+
+        For particles put down from above (:meth:`PhysicsWorld.rest_heights`). A ray
+        down past a ball's equator meets its flank, but the ball overhangs the table
+        there: a particle on the table under it touches nothing, and put on the
+        flank it slid down between ball and table and spun the ball (README,
+        "Stability on hard cases"). Rays up from the table to the hits measure the
+        gap under them: where every ray of a disc that meets an object has at least
+        a particle's diameter under it, the particle fits under and those hits are
+        no support. Under a box or a cylinder a ray starts inside and the gap is 0.
+        A particle already resting on an object keeps it as its support even when
+        the object is in the air (tipped, or knocked up): its rays start at it.
+
+        Args:
+            starts: the disc rays' starts, (5 n, 3), five rows a disc.
+            height, body: their hits' heights and bodies (-1: the table), (5 n,).
+        """
+        rows = np.flatnonzero(body >= 0)
+        if rows.size == 0:
+            return
+        ends = starts[rows].copy()
+        ends[:, 2] = height[rows]
+        bottoms = ends.copy()
+        bottoms[:, 2] = 0.0
+        gap = np.full(height.shape, np.inf)
+        for k, hit in self._cast(bottoms, ends):
+            gap[rows[k]] = hit[3][2] if hit[0] >= 0 else height[rows[k]]
+        fits = np.all(gap.reshape(-1, len(self._disc_offsets)) >= 2.0 * self._radius, axis=1)
+        under = np.repeat(fits, len(self._disc_offsets))
+        height[under] = 0.0
+        body[under] = -1

@@ -745,7 +745,8 @@ class PhysicsWorld(Closeable):
         The height of the highest surface under the particle's disc (rays from its
         centre and four points 0.9 radius around it), so a particle whose centre is
         just outside an object's side but whose sphere would overlap it rests on the
-        top face instead of being put into the side.
+        top face instead of being put into the side, and one that fits under an
+        overhang (beside a ball) rests on the table.
 
         Args:
             xy: particle centres, metres, world frame, shape (N, 2).
@@ -755,7 +756,8 @@ class PhysicsWorld(Closeable):
         """
         points = np.asarray(xy, dtype=float).reshape(-1, 2)
         top = self._rays.top()
-        return self._rays.support_heights(np.column_stack([points, np.full(len(points), top)]))
+        starts = np.column_stack([points, np.full(len(points), top)])
+        return self._rays.support_heights(starts, fit_under=True)
 
 
 def _finite(

@@ -61,23 +61,18 @@ def test_the_seeded_sample_keeps_its_record() -> None:
 #: support is capped at ``physics.substep_travel`` a sub-step and follows the
 #: support's slope: a 6.9 g box tipped on edge (509), particles climbing a ball's or
 #: a tilted box's or cylinder's top (911, 4125, 8861), light boxes and cylinders
-#: knocked about by fast fingertips (2371, 2934, 6416, 8716, 9984). Still broken, by
-#: 0.01-0.05 mm over the 1 mm allowed: a 5.3 g box struck at 3.65 m/s (1969), a 439 g
-#: cylinder (4876) and a 767 g ball (5965) pressed by particles riding on their tops.
-FUZZ_CASES: dict[int, list[str]] = {
-    509: [],
-    911: [],
-    1969: ["inside_object"],
-    2371: [],
-    2934: [],
-    4125: [],
-    4876: ["inside_object"],
-    5965: ["inside_object"],
-    6416: [],
-    8716: [],
-    8861: [],
-    9984: [],
-}
+#: knocked about by fast fingertips (2371, 2934, 6416, 8716, 9984). Held since the
+#: objects are reduced-coordinate bodies with 0.3 mm a sub-step (they broke by
+#: 0.01-0.05 mm over the 1 mm allowed): a 5.3 g box struck at 3.65 m/s (1969), a
+#: 439 g cylinder (4876) and a 767 g ball (5965) pressed by particles riding on their
+#: tops. Held since a disc that fits under an overhang rests on the table: a 6.8 g
+#: ball spun by particles put on its flank (2701). Broken since then: a 19.1 g
+#: cylinder of friction 1.56 with two fingertips on its top whose contacts merge
+#: (6571): the merge's re-seeded particles drag it to 1.06 times the speed bound in
+#: frame 13 (0.92 times with a particle put on its rim instead of the table beside
+#: it in frame 0, the one placement the overhang rule changes there).
+HELD = (509, 911, 1969, 2371, 2701, 2934, 4125, 4876, 5965, 6416, 8716, 8861, 9984)
+FUZZ_CASES: dict[int, list[str]] = {**{seed: [] for seed in HELD}, 6571: ["speed"]}
 
 
 @pytest.mark.parametrize(("seed", "broken"), FUZZ_CASES.items(), ids=str)

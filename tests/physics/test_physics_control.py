@@ -227,7 +227,7 @@ def test_a_particle_far_above_its_support_is_pulled_down_a_sub_step_travel_at_mo
 
     assert pull(0.0001) == 0.0  # within the 0.2 mm tolerance
     # 0.4 mm above: the law's own pull, (0.4 - 0.2) mm over its Δt; 20 mm above (a
-    # support that vanished under it): no faster than 0.5 mm a sub-step.
+    # support that vanished under it): no faster than physics.substep_travel a sub-step.
     assert 0.0 < -pull(0.0004) <= travel / h + 1e-12
     assert -pull(0.02) == pytest.approx(travel / h)
 
@@ -249,18 +249,23 @@ def test_the_support_is_followed_along_its_slope() -> None:
     assert drive.velocities(1, above, np.zeros((1, 3)), rest, press)[0, 2] < press[0]
 
 
+def _ball_and_box(make_world: Callable[..., PhysicsWorld], radius: float) -> PhysicsWorld:
+    """A ball of ``radius`` at x = 0.1 m and the 6 × 6 × 3 cm box at x = −0.1 m."""
+    return make_world(
+        objects=[
+            {"name": "ball", "shape": "sphere", "size": [radius], "position": [0.1, 0.0]},
+            {"name": "box", "shape": "box", "size": [0.06, 0.06, 0.03], "position": [-0.1, 0.0]},
+        ]
+    )
+
+
 def test_the_support_plane_of_a_ball_is_its_tangent_and_a_box_top_is_level(
     make_world: Callable[..., PhysicsWorld],
 ) -> None:
     from graspenv.physics.rays import SUPPORT_CLEARANCE
 
     radius = 0.04
-    world = make_world(
-        objects=[
-            {"name": "ball", "shape": "sphere", "size": [radius], "position": [0.1, 0.0]},
-            {"name": "box", "shape": "box", "size": [0.06, 0.06, 0.03], "position": [-0.1, 0.0]},
-        ]
-    )
+    world = _ball_and_box(make_world, radius)
     r = world.scene.proxy.particle_radius
     rays = world._rays
     # On the ball, 15 mm from its top (x) and 5 mm (y): the slope of the sphere there.
@@ -282,3 +287,27 @@ def test_the_support_plane_of_a_ball_is_its_tangent_and_a_box_top_is_level(
     assert z < height[0] <= z + 1.05 * uphill
     np.testing.assert_array_equal(slope[1:], 0.0)
     np.testing.assert_allclose(height[1:], 0.03, atol=1e-4)
+
+
+def test_a_particle_put_down_beside_a_ball_rests_on_the_table_under_its_overhang(
+    make_world: Callable[..., PhysicsWorld],
+) -> None:
+    radius = 0.03
+    world = _ball_and_box(make_world, radius)
+    r = world.scene.proxy.particle_radius
+    # Centres 1 mm outside the ball's equator and the box's side: each disc's ring
+    # ray meets the object. The ball overhangs the table there (a particle on the
+    # table misses it by far), so the particle rests on the table; the box is solid
+    # down to the table, so the particle rests on its top.
+    beside_ball = [0.1 + radius + 0.001, 0.0]
+    beside_box = [-0.1 + 0.03 + 0.001, 0.0]
+    on_ball = [0.1 + 0.3 * radius, 0.0]  # a shoulder with too little room under it
+    height = world.rest_heights([beside_ball, beside_box, on_ball])
+    assert height[0] == 0.0
+    assert height[1] == pytest.approx(0.03, abs=1e-4)
+    shoulder = radius + math.sqrt(radius**2 - (0.3 * radius) ** 2)
+    assert shoulder < height[2] < shoulder + r
+    # Without fit_under (a particle's own support, its rays starting at it) the
+    # flank below the ring ray is the support, as before.
+    start = np.array([[*beside_ball, 2 * radius]])
+    assert world._rays.support_heights(start)[0] > radius

@@ -29,7 +29,7 @@ CASES: list[object] = [
         for speed, fps in [(0.5, 60), (1.0, 60), (2.0, 60), (5.0, 60), (5.0, 240)]
     ),
     # Object masses from 5 g to 5 kg, the particles a tenth of the box's mass
-    # (proxy.mass_ratio; at a fixed 20 g the 5 g and 50 g boxes break, test_guards.py).
+    # (proxy.mass_ratio; at a fixed 20 g a 5 g box squeezed 5 mm breaks, test_guards.py).
     pytest.param(lambda: pinch_box("pinch 5 g", box(mass=0.005)), id="pinch 5 g"),
     pytest.param(lambda: pinch_box("pinch 50 g", box(mass=0.05)), id="pinch 50 g"),
     pytest.param(lambda: pinch_box("pinch 0.5 kg", box(mass=0.5)), id="pinch 0.5 kg"),

@@ -294,7 +294,6 @@ def test_a_particle_put_down_beside_a_ball_rests_on_the_table_under_its_overhang
 ) -> None:
     radius = 0.03
     world = _ball_and_box(make_world, radius)
-    r = world.scene.proxy.particle_radius
     # Centres 1 mm outside the ball's equator and the box's side: each disc's ring
     # ray meets the object. The ball overhangs the table there (a particle on the
     # table misses it by far), so the particle rests on the table; the box is solid
@@ -306,7 +305,7 @@ def test_a_particle_put_down_beside_a_ball_rests_on_the_table_under_its_overhang
     assert height[0] == 0.0
     assert height[1] == pytest.approx(0.03, abs=1e-4)
     shoulder = radius + math.sqrt(radius**2 - (0.3 * radius) ** 2)
-    assert shoulder < height[2] < shoulder + r
+    assert shoulder < height[2] < shoulder + world.scene.proxy.particle_radius
     # Without fit_under (a particle's own support, its rays starting at it) the
     # flank below the ring ray is the support, as before.
     start = np.array([[*beside_ball, 2 * radius]])

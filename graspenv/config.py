@@ -360,8 +360,9 @@ class PhysicsConfig:
         max_particle_force: clamp on each particle's planar control force, newtons,
             for particles of ``proxy.particle_mass`` (it scales with their mass).
             Under the old 5 N a 20 g particle pressed 3 mm in had 3.6 N left for
-            friction and the grip slipped early; 10 N keeps the grid's slip within
-            Coulomb's (README, "Accuracy across the grasp space").
+            friction and the grip slipped early; at 10 N 64 of the grid's 91 grasps
+            slip within 5 % of Coulomb's force (README, "Accuracy across the grasp
+            space").
         max_particle_speed: clamp on each particle's commanded speed, m/s.
         ccd: continuous collision detection for particles (swept sphere).
         allowed_ccd_penetration: Bullet's allowed CCD penetration, metres.
@@ -497,8 +498,9 @@ class SceneConfig:
 #: grasp-space grid (README, "Speed against error", "Accuracy across the grasp
 #: space"). ``reference`` is the setting the benchmark's drift is measured against:
 #: objects in reduced coordinates (their contacts stiffened to match; the default's
-#: objects are the same since 2026-12-04), the force clamp raised so that it does not
-#: cut the grip's friction short, twice the sub-steps and solver iterations. A finer
+#: objects are the same since 2026-12-04, and so is its 0.3 mm a sub-step), the force
+#: clamp raised so that it does not cut the grip's friction short, twice the
+#: sub-steps and solver iterations. A finer
 #: contour (2 mm) is not in it: with the particle mass fixed it doubles the grip's
 #: stiffness and normal force, and the turn got worse (0.88° against 0.19°), so
 #: refining it does not converge.

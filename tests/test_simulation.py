@@ -276,6 +276,12 @@ def test_make_simulation_takes_the_environments_presets() -> None:
     with graspenv.make_simulation(fidelity="fast") as sim:
         assert sim.config.physics.substeps == FIDELITY_PRESETS["fast"]["physics"]["substeps"]
         assert sim.config.contacts.spacing == FIDELITY_PRESETS["fast"]["contacts"]["spacing"]
+        # fast keeps the maximal-coordinate objects it was measured with (README,
+        # "Speed against error"); the default's are reduced-coordinate bodies.
+        physics = sim.config.physics
+        assert (physics.reduced_objects, physics.contact_erp) == (False, 0.08)
+        assert physics.max_particle_force == 5.0
+    assert load_config(None).physics.reduced_objects
     with graspenv.make_simulation(fidelity="reference", physics={"substeps": 3}) as sim:
         assert sim.config.physics.substeps == 3
         assert sim.config.physics.solver_iterations == 100

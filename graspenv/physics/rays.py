@@ -188,9 +188,11 @@ class RayCaster:
         "Stability on hard cases"). Rays up from the table to the hits measure the
         gap under them: where every ray of a disc that meets an object has at least
         a particle's diameter under it, the particle fits under and those hits are
-        no support. Under a box or a cylinder a ray starts inside and the gap is 0.
-        A particle already resting on an object keeps it as its support even when
-        the object is in the air (tipped, or knocked up): its rays start at it.
+        no support. Under a box or a cylinder resting on the table a ray starts
+        inside and the gap is 0; under the raised side of a tipped one a particle
+        goes on the table only where it fits, as beside a ball. A particle already
+        resting on an object keeps it as its support even when the object is in the
+        air (tipped, or knocked up): its rays start at it.
 
         Args:
             starts: the disc rays' starts, (5 n, 3), five rows a disc.
@@ -204,8 +206,9 @@ class RayCaster:
         bottoms = ends.copy()
         bottoms[:, 2] = 0.0
         gap = np.full(height.shape, np.inf)
+        table = self._bodies.table
         for k, hit in self._cast(bottoms, ends):
-            gap[rows[k]] = hit[3][2] if hit[0] >= 0 else height[rows[k]]
+            gap[rows[k]] = hit[3][2] if hit[0] >= 0 and hit[0] != table else height[rows[k]]
         fits = np.all(gap.reshape(-1, len(self._disc_offsets)) >= 2.0 * self._radius, axis=1)
         under = np.repeat(fits, len(self._disc_offsets))
         height[under] = 0.0

@@ -243,7 +243,14 @@ class PersistentProxies:
         if beside.size:
             # A new point far from its anchor's particle (a merged contact's other
             # half) is put down where it is, as a touch-down would be; started beside
-            # the anchor it raced along the contour and dragged what it rubbed.
+            # the anchor it raced along the contour and dragged what it rubbed. The
+            # distance is to the particle, not to the anchor point: at a merge the
+            # anchors are points the matching gave to kept particles across the
+            # merged contour, near the new points but far from their own particles
+            # (measured from the points, the fix changed nothing). A sliding grip's
+            # particles lag their points, hence the reach of two spacings or two
+            # particle diameters (the grid and the bench's default scenes were
+            # unchanged by it).
             start = pool.positions(particles[anchors, 0])[:, :2]
             reach = FAR_FROM_ANCHOR * max(self._spacing, 2.0 * pool.radius)
             far = np.hypot(*(current[beside] - start).T) > reach
@@ -254,8 +261,9 @@ class PersistentProxies:
             pool.place(ids.reshape(-1), pool.positions(particles[anchors].reshape(-1)))
             particles[beside] = ids
             born[beside] = True
-        # Points in contacts where nothing was kept: the culling puts down what is
-        # near, or else those contours are put down afresh.
+        # Points in contacts where nothing was kept, and new points far from their
+        # anchor's particle: the culling puts down what is near, or else they are
+        # put down afresh.
         if lost.size and not self._cull:
             ids = pool.acquire(lost.size * layers).reshape(lost.size, -1)
             self._put_down(ids, current[lost])

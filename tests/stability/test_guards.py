@@ -4,8 +4,9 @@ at its default and breaks a named one with the guard off (or set very loose).
 The speed limit (``physics.max_particle_speed``) has no test here: switched off
 (1000 m/s) it left the object poses bit-identical in 21 of the 26 hard cases and
 within 5 nm in the other 5, and broke no invariant that holds with it, there or in
-strikes at up to 12 m/s across the full table. The force limit caps a particle's
-acceleration at F/m = 250 m/s², so it needs 20 ms of free running to reach 5 m/s,
+strikes at up to 12 m/s across the full table (measured with the old
+maximal-coordinate default). The force limit caps a particle's acceleration at
+F/m = 500 m/s² (10 N on 20 g), so it needs 10 ms of free running to reach 5 m/s,
 and a particle lagging its contour point by more than the penetration margin
 (5 mm: any finger faster than about 1.2 m/s) is lifted onto the object's top
 before it strikes a side.

@@ -48,7 +48,9 @@ CASES: list[object] = [
     # along the contour. At a fixed four sub-steps and without culling a second kick
     # followed and a particle ended 1.68 mm inside the tilted box; with culling
     # 0.80 mm, and with the sub-steps raised to the motion 0.19 mm (tolerance 1 mm).
-    # With the merged half put down where it is: 0.27 m/s and 0.07 mm.
+    # (0.39 m/s and 0.19 mm with the old maximal-coordinate objects; 0.37 m/s and
+    # 0.24 mm with the reduced-coordinate ones.) With the merged half put down where
+    # it is: 0.27 m/s and 0.07 mm.
     pytest.param(cases.merge_split, id="merge and split"),
     # Found by a random search of three-finger motions: a thin fingertip shoves the
     # box at 0.48 m/s into a wide one drifting the other way at 0.14 m/s. At a fixed

@@ -251,14 +251,14 @@ class PersistentProxies:
             # particles lag their points, hence the reach of two spacings or two
             # particle diameters (the grid and the bench's default scenes were
             # unchanged by it).
-            start = pool.positions(particles[anchors, 0])[:, :2]
+            start = pool.positions(particles[anchors].reshape(-1)).reshape(-1, layers, 3)
             reach = FAR_FROM_ANCHOR * max(self._spacing, 2.0 * pool.radius)
-            far = np.hypot(*(current[beside] - start).T) > reach
-            lost = np.concatenate([lost, beside[far]])
-            beside, anchors = beside[~far], anchors[~far]
+            near = np.hypot(*(current[beside] - start[:, 0, :2]).T) <= reach
+            lost = np.concatenate([lost, beside[~near]])
+            beside, start = beside[near], start[near]
         if beside.size:
             ids = pool.acquire(beside.size * layers).reshape(-1, layers)
-            pool.place(ids.reshape(-1), pool.positions(particles[anchors].reshape(-1)))
+            pool.place(ids.reshape(-1), start.reshape(-1, 3))
             particles[beside] = ids
             born[beside] = True
         # Points in contacts where nothing was kept, and new points far from their

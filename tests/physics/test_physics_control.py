@@ -10,7 +10,7 @@ import pybullet as pb
 import pytest
 
 from graspenv.physics import PhysicsWorld
-from graspenv.physics.control import ParticleDrive
+from graspenv.physics.control import ParticleDrive, SupportPlanes
 
 # The default scene's box: 6 × 6 × 3 cm, centred at the origin.
 BOX_HALF = 0.03
@@ -152,7 +152,6 @@ def test_a_particle_resting_against_a_face_stays_finite(
 
 def test_a_light_scene_scales_the_table_press_but_not_the_press_on_an_object() -> None:
     from graspenv.config import load_config
-    from graspenv.physics.control import ParticleDrive, SupportPlanes
 
     light = load_config(
         None, objects=[{"name": "box", "shape": "box", "size": [0.06, 0.06, 0.03], "mass": 0.005}]
@@ -211,7 +210,6 @@ def _one_bottom_particle(substeps: int = 4) -> tuple[ParticleDrive, float, float
 
 def test_a_particle_far_above_its_support_is_pulled_down_a_sub_step_travel_at_most() -> None:
     from graspenv.config import PhysicsConfig
-    from graspenv.physics.control import SupportPlanes
 
     drive, r, h = _one_bottom_particle()
     travel = PhysicsConfig().substep_travel
@@ -233,8 +231,6 @@ def test_a_particle_far_above_its_support_is_pulled_down_a_sub_step_travel_at_mo
 
 
 def test_the_support_is_followed_along_its_slope() -> None:
-    from graspenv.physics.control import SupportPlanes
-
     drive, r, _ = _one_bottom_particle()
     # A face rising 1 in 2 along +x, measured under the particle at x = 0.
     rest = SupportPlanes(np.array([0.04 + r]), np.zeros((1, 2)), np.array([[0.5, 0.0]]))

@@ -281,10 +281,11 @@ def test_make_simulation_takes_the_environments_presets() -> None:
         physics = sim.config.physics
         assert (physics.reduced_objects, physics.contact_erp) == (False, 0.08)
         assert physics.max_particle_force == 5.0
+        assert physics.solver_iterations == 50
     assert load_config(None).physics.reduced_objects
     with graspenv.make_simulation(fidelity="reference", physics={"substeps": 3}) as sim:
         assert sim.config.physics.substeps == 3
-        assert sim.config.physics.solver_iterations == 100
+        assert sim.config.physics.solver_iterations == 300
     with graspenv.make_simulation() as sim:
         assert sim.config == load_config(None)
     # auto picks the cheapest preset within the budget (PRESET_DRIFT_MM).

@@ -46,7 +46,10 @@ def test_4_grasp_and_slide_10_cm() -> None:
 
 
 def test_5_firm_squeeze_resists_a_third_finger_light_one_does_not() -> None:
-    assert scenarios.third_finger(PERSISTENT, 0.004)["moved_mm"] < 2.0
+    # The third finger travels 25 mm: held firmly, the box gives less than a tenth of
+    # that (2.07 mm at the default's 150 solver iterations, 2.15 at 300: the 0.77 mm
+    # measured at 50 was an unconverged solver's extra grip); lightly, it goes along.
+    assert scenarios.third_finger(PERSISTENT, 0.004)["moved_mm"] < 2.5
     assert scenarios.third_finger(PERSISTENT, 0.0005)["moved_mm"] > 10.0
 
 

@@ -56,15 +56,13 @@ GUARDS = [
     _off("proxy.penetration_limit", False, cases.deep_release, "speed"),
     _off("proxy.penetration_margin", 0.03, cases.deep_release, "speed"),
     # Particles of a fixed 20 g squeezing a 5 g box 5 mm outweigh it fourfold: at a
-    # fixed four sub-steps a particle ends 2.77 mm inside it in the turn (0.14 mm
-    # with 0.5 g particles, a tenth of its mass; the 3 mm squeeze at the sub-steps
-    # that follow the motion stays within 0.92 mm without the guard).
-    _off(
-        "proxy.mass_ratio",
-        0.0,
-        _light_pinch_at_four_substeps,
-        "inside_object",
-    ),
+    # fixed four sub-steps they kick it past its speed bound in the turn (1.89 m/s
+    # against 1.33; a particle ends 0.69 mm inside it), where 0.5 g particles, a
+    # tenth of its mass, keep every invariant. At 50 solver iterations, before the
+    # default's 150, a particle ended 2.77 mm inside it (0.14 mm with the guard);
+    # the 3 mm squeeze at the sub-steps that follow the motion stayed within 0.92 mm
+    # without the guard.
+    _off("proxy.mass_ratio", 0.0, _light_pinch_at_four_substeps, "speed"),
     # Under a stiff control law (32 sub-steps) a 6 mm squeeze asks about 440 N of
     # each 20 g particle; without the clamp one ends 1.17 mm inside the 50 g box in
     # the turn (0.08 mm with it). The margin is thin: at 16 sub-steps, at 4 mm, or

@@ -8,7 +8,7 @@ PIP    := $(PY) -m pip install --quiet --disable-pip-version-check
 # pulls a multi-gigabyte CUDA build.
 TORCH  := torch==2.13.0
 OUT    ?= runs/demo
-POLICY ?= agents/policies/TurnInPlace-sac
+POLICY ?= agents/policies/TurnInPlace-bc
 EPISODES ?= 100
 
 .PHONY: demo test lint typecheck pytest slow train-deps baselines compare speed serve latency clean

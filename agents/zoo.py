@@ -24,11 +24,22 @@ transitions alone:
   demonstrated actions under the actor's own (squashed Gaussian) distribution, so
   that training starts from a policy that does what the strategy does, its spread
   included;
+- ``dagger: R`` (with ``behaviour_cloning``): then R rounds of DAgger (Ross, Gordon
+  and Bagnell, AISTATS 2011): the cloned actor plays ``dagger_episodes`` episodes
+  itself, the strategy says what it would have done in every state the actor
+  reached (its own phase kept along the actor's episode), those labels join the
+  demonstrations and the actor is fitted again. A clone alone drifts off the
+  states the strategy visits and has never seen what to do there; on SidePush a
+  clone alone pushed no box (0 of 30 episodes). The ``imitation`` library has
+  DAgger but pins gymnasium 0.29 and stable-baselines3 2.2, so the loop is here;
 - ``critic_warmup: N``: then N steps of SAC's own critic update with the actor held
   fixed, so that the actor's first updates follow a critic that has seen the
   demonstrations' returns rather than a random one (a cloned actor following a
   random critic unlearns its cloning: on SqueezeHold a least-squares cloning alone
   held 20 of 20 episodes, and 2 000 steps of SAC after it 1 of 10).
+
+With ``learning_starts`` above ``n_timesteps`` SAC itself never updates, and the
+shipped policy is the clone (README, "Learned baselines").
 """
 
 from __future__ import annotations
@@ -62,6 +73,8 @@ class ScriptedDemonstrations(BaseCallback):
         episodes: int = 50,
         seed: int = 20_000,
         behaviour_cloning: int = 0,
+        dagger: int = 0,
+        dagger_episodes: int = 20,
         critic_warmup: int = 0,
         verbose: int = 1,
     ) -> None:
@@ -70,14 +83,25 @@ class ScriptedDemonstrations(BaseCallback):
             raise ValueError(f"ScriptedDemonstrations: episodes must be >= 1, got {episodes}")
         for key, value in (
             ("behaviour_cloning", behaviour_cloning),
+            ("dagger", dagger),
             ("critic_warmup", critic_warmup),
         ):
             if value < 0:
                 raise ValueError(f"ScriptedDemonstrations: {key} must be >= 0, got {value}")
+        if dagger and not behaviour_cloning:
+            raise ValueError("ScriptedDemonstrations: dagger needs behaviour_cloning > 0")
+        if dagger_episodes < 1:
+            raise ValueError(
+                f"ScriptedDemonstrations: dagger_episodes must be >= 1, got {dagger_episodes}"
+            )
         self.spec = load_agent(f"scripted:{strategy}")
         self.strategy, self.episodes, self.first_seed = strategy, episodes, seed
         self.behaviour_cloning, self.critic_warmup = behaviour_cloning, critic_warmup
+        self.dagger, self.dagger_episodes = dagger, dagger_episodes
         self.transitions = self.successes = 0
+        # What the actor is fitted to: states and the strategy's (scaled) actions.
+        self._states: list[Any] = []
+        self._labels: list[Any] = []
 
     def _on_training_start(self) -> None:
         model: Any = self.model
@@ -101,10 +125,54 @@ class ScriptedDemonstrations(BaseCallback):
             layout_env.close()
         # Environment i starts from seed + i; its later episodes continue its stream.
         env.seed(self.first_seed)
+        done_episodes, self.successes = self._play(model, agents, self.episodes, demonstrate=True)
+        self.logger.record("demonstrations/transitions", self.transitions)
+        self.logger.record("demonstrations/successes", self.successes)
+        if self.verbose:
+            print(
+                f"replay buffer filled with {done_episodes} episodes of {self.strategy} "
+                f"({self.transitions} transitions, {self.successes} successes)",
+                flush=True,
+            )
+        if self.behaviour_cloning:
+            self.logger.record("demonstrations/cloning_loss", self._clone(model))
+        for round_ in range(self.dagger):
+            # The actor's own episodes, from seeds apart from the demonstrations'.
+            env.seed(self.first_seed + 1_000 * (round_ + 1))
+            _, successes = self._play(model, agents, self.dagger_episodes, demonstrate=False)
+            loss = self._clone(model)
+            self.logger.record("demonstrations/dagger_successes", successes)
+            if self.verbose:
+                print(
+                    f"DAgger round {round_ + 1}: the actor succeeded in {successes} of "
+                    f"{self.dagger_episodes} episodes; {sum(map(len, self._labels))} "
+                    f"labelled states; loss {loss:.3f}",
+                    flush=True,
+                )
+        # Where training would have started: the algorithm's seed, fresh episodes.
+        env.seed(model.seed)
+        model._last_obs = env.reset()
+        model._last_episode_starts = np.ones(env.num_envs, dtype=bool)
+        if self.critic_warmup:
+            self.logger.record("demonstrations/critic_loss", self._warm_critic(model))
+
+    def _play(
+        self, model: Any, agents: list[Any], episodes: int, demonstrate: bool
+    ) -> tuple[int, int]:
+        """Play ``episodes`` episodes in the training environments: the strategy's
+        (``demonstrate``, every transition into the replay buffer) or the actor's
+        (deterministic), every state labelled with the strategy's action either way.
+        Returns the episodes played and how many succeeded."""
+        env = self.training_env
+        for agent in agents:
+            agent.reset()
         obs: Any = env.reset()  # state observations: an array, one row per environment
-        done_episodes = 0
-        while done_episodes < self.episodes:
-            actions = np.stack([agents[i].predict(obs[i])[0] for i in range(env.num_envs)])
+        done_episodes = successes = 0
+        while done_episodes < episodes:
+            labels = np.stack([agents[i].predict(obs[i])[0] for i in range(env.num_envs)])
+            self._states.append(obs.copy())
+            self._labels.append(model.policy.scale_action(labels))
+            actions = labels if demonstrate else model.predict(obs, deterministic=True)[0]
             new_obs: Any
             new_obs, rewards, dones, infos = env.step(actions)
             next_obs = new_obs.copy()
@@ -113,50 +181,40 @@ class ScriptedDemonstrations(BaseCallback):
                     next_obs[i] = infos[i]["terminal_observation"]
                     agents[i].reset()
                     done_episodes += 1
-                    self.successes += bool(infos[i].get("is_success", False))
-            model.replay_buffer.add(
-                obs, next_obs, model.policy.scale_action(actions), rewards, dones, infos
-            )
-            self.transitions += env.num_envs
+                    successes += bool(infos[i].get("is_success", False))
+            if demonstrate:
+                model.replay_buffer.add(
+                    obs, next_obs, model.policy.scale_action(actions), rewards, dones, infos
+                )
+                self.transitions += env.num_envs
             obs = new_obs
-        # Where training would have started: the algorithm's seed, fresh episodes.
-        env.seed(model.seed)
-        model._last_obs = env.reset()
-        model._last_episode_starts = np.ones(env.num_envs, dtype=bool)
-        self.logger.record("demonstrations/transitions", self.transitions)
-        self.logger.record("demonstrations/successes", self.successes)
-        if self.behaviour_cloning:
-            self.logger.record("demonstrations/cloning_loss", self._clone(model))
-        if self.critic_warmup:
-            self.logger.record("demonstrations/critic_loss", self._warm_critic(model))
-        if self.verbose:
-            print(
-                f"replay buffer filled with {done_episodes} episodes of {self.strategy} "
-                f"({self.transitions} transitions, {self.successes} successes)",
-                flush=True,
-            )
+        return done_episodes, successes
 
     def _clone(self, model: Any) -> float:
-        """Maximise the log-likelihood of the demonstrated actions under the actor
-        (its own optimiser); the last batch's negative log-likelihood."""
+        """Maximise the log-likelihood of the strategy's actions, in every state
+        labelled so far, under the actor (its own optimiser); the last batch's
+        negative log-likelihood."""
         import torch
 
         actor = model.actor
+        states = torch.as_tensor(np.concatenate(self._states), dtype=torch.float32)
+        # Saturated actions (the strategies clip to ±1) would put atanh at infinity:
+        # keep them just inside.
+        labels = torch.as_tensor(np.concatenate(self._labels), dtype=torch.float32)
+        labels = labels.clamp(-0.999, 0.999)
+        generator = torch.Generator().manual_seed(model.seed or 0)
         loss = torch.zeros(())
         actor.set_training_mode(True)
         for _ in range(self.behaviour_cloning):
-            batch = model.replay_buffer.sample(model.batch_size)
-            mean, log_std, _ = actor.get_action_dist_params(batch.observations)
+            rows = torch.randint(len(states), (model.batch_size,), generator=generator)
+            mean, log_std, _ = actor.get_action_dist_params(states[rows])
             distribution = actor.action_dist.proba_distribution(mean, log_std)
-            # Saturated actions (the strategies clip to ±1) would put atanh at
-            # infinity: keep them just inside.
-            target = batch.actions.clamp(-0.999, 0.999)
-            loss = -distribution.log_prob(target).mean()
+            loss = -distribution.log_prob(labels[rows]).mean()
             actor.optimizer.zero_grad()
             loss.backward()
             actor.optimizer.step()
         actor.set_training_mode(False)
-        return float(loss)
+        return float(loss.detach())
 
     def _warm_critic(self, model: Any) -> float:
         """SAC's critic update (as ``SAC.train``) with the actor and the entropy
@@ -189,7 +247,7 @@ class ScriptedDemonstrations(BaseCallback):
             polyak_update(critic.parameters(), target_critic.parameters(), model.tau)
             polyak_update(model.batch_norm_stats, model.batch_norm_stats_target, 1.0)
         critic.set_training_mode(False)
-        return float(loss)
+        return float(loss.detach())
 
     def _on_step(self) -> bool:
         return True

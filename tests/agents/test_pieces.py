@@ -55,6 +55,10 @@ def test_scripted_demonstrations_need_a_replay_buffer_and_plain_observations() -
         ScriptedDemonstrations("pinch-and-turn", behaviour_cloning=-1)
     with pytest.raises(ValueError, match="critic_warmup"):
         ScriptedDemonstrations("pinch-and-turn", critic_warmup=-1)
+    with pytest.raises(ValueError, match="dagger needs behaviour_cloning"):
+        ScriptedDemonstrations("pinch-and-turn", dagger=1)
+    with pytest.raises(ValueError, match="dagger_episodes"):
+        ScriptedDemonstrations("pinch-and-turn", behaviour_cloning=1, dagger=1, dagger_episodes=0)
     with pytest.raises(ValueError, match="unknown scripted strategy"):
         ScriptedDemonstrations("juggle")
 
@@ -67,6 +71,42 @@ def test_scripted_demonstrations_need_a_replay_buffer_and_plain_observations() -
     ):
         with pytest.raises(ValueError, match=message):
             model.learn(1, callback=ScriptedDemonstrations("pinch-and-turn", episodes=1))
+        model.get_env().close()
+
+
+def test_dagger_labels_the_actors_states_without_storing_its_transitions() -> None:
+    """A DAgger round plays the actor, labels each state it reached with the
+    strategy's action and refits; the replay buffer keeps the demonstrations alone."""
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3 import SAC
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from graspenv_agents.zoo import ScriptedDemonstrations
+
+    def make() -> gym.Env:
+        return RelativeGoal(gym.make("graspenv/TurnInPlace-v0"))
+
+    model = SAC(
+        "MlpPolicy", DummyVecEnv([make]), buffer_size=2000, learning_starts=10**6,
+        policy_kwargs={"net_arch": [16, 16]}, seed=0,
+    )  # fmt: skip
+    demos = ScriptedDemonstrations(
+        "pinch-and-turn", episodes=1, behaviour_cloning=5, dagger=1, dagger_episodes=1
+    )
+    try:
+        model.learn(1, callback=demos)
+        labelled = sum(map(len, demos._labels))
+        # The demonstration and then the actor's episode: both labelled, only the
+        # demonstration stored as transitions (plus learn's one step).
+        assert labelled > demos.transitions
+        assert model.replay_buffer.size() == demos.transitions + 1
+        actor_states = np.concatenate(demos._states)[demos.transitions :]
+        actor_labels = np.concatenate(demos._labels)[demos.transitions :]
+        # The labels are the strategy's, not what the untrained actor did.
+        actions, _ = model.predict(actor_states, deterministic=True)
+        assert not np.allclose(actions, actor_labels, atol=0.05)
+        assert np.all(np.abs(actor_labels) <= 1.0)
+    finally:
         model.get_env().close()
 
 

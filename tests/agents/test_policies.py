@@ -16,9 +16,13 @@ pytest.importorskip("stable_baselines3")  # the policies are stable-baselines3 m
 FOLDERS = sorted(p for p in POLICIES.iterdir() if (p / "run.json").is_file())
 
 
-def test_both_learned_baselines_are_shipped() -> None:
+def test_the_learned_baselines_are_shipped() -> None:
     homes = {json.loads((p / "run.json").read_text())["env_id"] for p in FOLDERS}
-    assert {"graspenv/TurnInPlace-v0", "graspenv/SqueezeSlide-v0"} <= homes
+    assert {
+        "graspenv/TurnInPlace-v0",
+        "graspenv/SqueezeSlide-v0",
+        "graspenv/SqueezeHold-v0",
+    } <= homes
 
 
 @pytest.mark.parametrize("folder", FOLDERS, ids=lambda p: p.name)

@@ -37,7 +37,7 @@ ALGO_KEYS = {
     "  buffer_size: 5000\n  callback:\n"
     "    - graspenv_agents.zoo.ScriptedDemonstrations:\n"
     "        strategy: pinch-and-turn\n        episodes: 1\n        behaviour_cloning: 20\n"
-    "        critic_warmup: 20\n",
+    "        dagger: 1\n        dagger_episodes: 1\n        critic_warmup: 20\n",
 }
 
 
@@ -104,6 +104,9 @@ def test_demonstrations_fill_the_replay_buffer_first(run_folder: Path) -> None:
     for tag in ("demonstrations/cloning_loss", "demonstrations/critic_loss"):
         (loss,) = log.Scalars(tag)
         assert math.isfinite(loss.value), tag
+    # One DAgger round: the actor's own episode, labelled by the strategy, refitted.
+    (dagger,) = log.Scalars("demonstrations/dagger_successes")
+    assert dagger.value in (0.0, 1.0)
 
 
 def _events(run_folder: Path) -> Path:

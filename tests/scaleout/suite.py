@@ -25,7 +25,7 @@ from graspenv.cli import main  # noqa: E402
 from graspenv_agents.compare import POLICIES, compare  # noqa: E402
 
 ENVS = ["graspenv/TurnInPlace-v0"]
-AGENTS = ["random", "scripted:pinch-and-turn", str(POLICIES / "TurnInPlace-sac")]
+AGENTS = ["random", "scripted:pinch-and-turn", str(POLICIES / "TurnInPlace-bc")]
 EPISODES, BATCH = 6, 2
 
 

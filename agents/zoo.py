@@ -48,6 +48,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from numpy.typing import NDArray
 from stable_baselines3.common.callbacks import BaseCallback
 
 from .loading import load_agent
@@ -62,9 +63,23 @@ class ScriptedDemonstrations(BaseCallback):
         strategy: a name from :data:`graspenv_agents.scripted.STRATEGIES`.
         episodes: episodes to play, >= 1.
         seed: seed of the first episode in each environment (environment i: seed +
-            i; its later episodes continue its stream); apart from training's seeds
-            and the evaluation seeds (1000 onwards).
-        verbose: 1 prints one line with what was added.
+            i; its later episodes continue its stream); DAgger round r starts at
+            seed + 1000 r. Keep it apart from training's seeds and the evaluation
+            seeds (1000 onwards). It does not follow the algorithm's seed: training
+            seeds share the demonstrations and differ in the networks' start and
+            the batches drawn.
+        behaviour_cloning: gradient steps of the fit to the labelled states, >= 0.
+        dagger: DAgger rounds after the fit (each plays, labels and fits again);
+            needs ``behaviour_cloning``.
+        dagger_episodes: the actor's episodes in each round, >= 1.
+        critic_warmup: SAC critic updates with the actor fixed, >= 0.
+        verbose: 1 prints what was added and each DAgger round.
+
+    The fit draws its batches from the labelled states with a generator of its own
+    (seeded by the algorithm's seed), not from the replay buffer: until DAgger came
+    it drew them with ``replay_buffer.sample``, from numpy's global stream, so runs
+    made before then (the README's CatchBall run with ``critic_warmup``) do not
+    repeat bit for bit.
     """
 
     def __init__(
@@ -100,8 +115,8 @@ class ScriptedDemonstrations(BaseCallback):
         self.dagger, self.dagger_episodes = dagger, dagger_episodes
         self.transitions = self.successes = 0
         # What the actor is fitted to: states and the strategy's (scaled) actions.
-        self._states: list[Any] = []
-        self._labels: list[Any] = []
+        self._states: list[NDArray[np.float32]] = []
+        self._labels: list[NDArray[np.float32]] = []
 
     def _on_training_start(self) -> None:
         model: Any = self.model
@@ -124,6 +139,9 @@ class ScriptedDemonstrations(BaseCallback):
         finally:
             layout_env.close()
         # Environment i starts from seed + i; its later episodes continue its stream.
+        import torch
+
+        self._generator = torch.Generator().manual_seed(model.seed or 0)
         env.seed(self.first_seed)
         done_episodes, self.successes = self._play(model, agents, self.episodes, demonstrate=True)
         self.logger.record("demonstrations/transitions", self.transitions)
@@ -139,14 +157,18 @@ class ScriptedDemonstrations(BaseCallback):
         for round_ in range(self.dagger):
             # The actor's own episodes, from seeds apart from the demonstrations'.
             env.seed(self.first_seed + 1_000 * (round_ + 1))
-            _, successes = self._play(model, agents, self.dagger_episodes, demonstrate=False)
+            played, successes = self._play(model, agents, self.dagger_episodes, demonstrate=False)
             loss = self._clone(model)
-            self.logger.record("demonstrations/dagger_successes", successes)
+            # One point a round (x: the round), written now: a clone's run may end
+            # before stable-baselines3 writes its own log.
+            self.logger.record("demonstrations/dagger_success_rate", successes / played)
+            self.logger.record("demonstrations/dagger_cloning_loss", loss)
+            self.logger.dump(step=round_ + 1)
             if self.verbose:
                 print(
                     f"DAgger round {round_ + 1}: the actor succeeded in {successes} of "
-                    f"{self.dagger_episodes} episodes; {sum(map(len, self._labels))} "
-                    f"labelled states; loss {loss:.3f}",
+                    f"{played} episodes; {sum(map(len, self._labels))} labelled states; "
+                    f"loss {loss:.3f}",
                     flush=True,
                 )
         # Where training would have started: the algorithm's seed, fresh episodes.
@@ -155,6 +177,7 @@ class ScriptedDemonstrations(BaseCallback):
         model._last_episode_starts = np.ones(env.num_envs, dtype=bool)
         if self.critic_warmup:
             self.logger.record("demonstrations/critic_loss", self._warm_critic(model))
+        self.logger.dump(step=0)
 
     def _play(
         self, model: Any, agents: list[Any], episodes: int, demonstrate: bool
@@ -202,11 +225,10 @@ class ScriptedDemonstrations(BaseCallback):
         # keep them just inside.
         labels = torch.as_tensor(np.concatenate(self._labels), dtype=torch.float32)
         labels = labels.clamp(-0.999, 0.999)
-        generator = torch.Generator().manual_seed(model.seed or 0)
         loss = torch.zeros(())
         actor.set_training_mode(True)
         for _ in range(self.behaviour_cloning):
-            rows = torch.randint(len(states), (model.batch_size,), generator=generator)
+            rows = torch.randint(len(states), (model.batch_size,), generator=self._generator)
             mean, log_std, _ = actor.get_action_dist_params(states[rows])
             distribution = actor.action_dist.proba_distribution(mean, log_std)
             loss = -distribution.log_prob(labels[rows]).mean()

@@ -75,12 +75,14 @@ def test_scripted_demonstrations_need_a_replay_buffer_and_plain_observations() -
 
 
 def test_dagger_labels_the_actors_states_without_storing_its_transitions() -> None:
-    """A DAgger round plays the actor, labels each state it reached with the
-    strategy's action and refits; the replay buffer keeps the demonstrations alone."""
+    """A DAgger round plays the actor and labels each state it reached with what the
+    strategy does there (its phase kept along the actor's episode); the replay
+    buffer keeps the demonstrations alone."""
     pytest.importorskip("stable_baselines3")
     from stable_baselines3 import SAC
     from stable_baselines3.common.vec_env import DummyVecEnv
 
+    from graspenv_agents.loading import load_agent
     from graspenv_agents.zoo import ScriptedDemonstrations
 
     def make() -> gym.Env:
@@ -95,17 +97,24 @@ def test_dagger_labels_the_actors_states_without_storing_its_transitions() -> No
     )
     try:
         model.learn(1, callback=demos)
-        labelled = sum(map(len, demos._labels))
-        # The demonstration and then the actor's episode: both labelled, only the
-        # demonstration stored as transitions (plus learn's one step).
-        assert labelled > demos.transitions
+        states = np.concatenate(demos._states)
+        labels = np.concatenate(demos._labels)
+        # The demonstration's transitions, and learn's one step, are all it stores.
         assert model.replay_buffer.size() == demos.transitions + 1
-        actor_states = np.concatenate(demos._states)[demos.transitions :]
-        actor_labels = np.concatenate(demos._labels)[demos.transitions :]
-        # The labels are the strategy's, not what the untrained actor did.
+        actor_states = states[demos.transitions :]
+        actor_labels = labels[demos.transitions :]
+        assert len(actor_states) > 1
+        # The same strategy, fed the actor's states in order, says the same.
+        env = make()
+        try:
+            strategy = load_agent("scripted:pinch-and-turn").build(env)
+            said = np.stack([strategy.predict(s)[0] for s in actor_states])
+        finally:
+            env.close()
+        np.testing.assert_allclose(model.policy.scale_action(said), actor_labels, atol=1e-6)
+        # And that is not what the barely fitted actor did.
         actions, _ = model.predict(actor_states, deterministic=True)
         assert not np.allclose(actions, actor_labels, atol=0.05)
-        assert np.all(np.abs(actor_labels) <= 1.0)
     finally:
         model.get_env().close()
 

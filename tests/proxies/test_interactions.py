@@ -46,11 +46,16 @@ def test_4_grasp_and_slide_10_cm() -> None:
 
 
 def test_5_firm_squeeze_resists_a_third_finger_light_one_does_not() -> None:
-    # The third finger travels 25 mm: held firmly, the box gives less than a tenth of
-    # that (2.07 mm at the default's 150 solver iterations, 2.15 at 300: the 0.77 mm
-    # measured at 50 was an unconverged solver's extra grip); lightly, it goes along.
-    assert scenarios.third_finger(PERSISTENT, 0.004)["moved_mm"] < 2.5
-    assert scenarios.third_finger(PERSISTENT, 0.0005)["moved_mm"] > 10.0
+    # The third finger meets the box and pushes on 20 mm. Held firmly the box gives
+    # 2.07 mm at the default's 150 solver iterations (2.15 at 300); the line was
+    # 2 mm until then, set when an unconverged solver (50 iterations) gave 0.77 mm,
+    # and is 2.5 mm since: a loosening, made because the solver converged, with the
+    # contrast the paper shows asserted beside it. Held lightly it goes along.
+    firm = scenarios.third_finger(PERSISTENT, 0.004)["moved_mm"]
+    light = scenarios.third_finger(PERSISTENT, 0.0005)["moved_mm"]
+    assert firm < 2.5
+    assert light > 10.0
+    assert firm < light / 5
 
 
 def test_6_release_pushes_outward_from_the_tighter_side() -> None:

@@ -70,10 +70,12 @@ slow: $(VENV)/.dev
 
 train-deps: $(VENV)/.train
 
-# The learned baselines in the README (long: see README "Learned baselines").
+# The learned baselines in the README (behaviour clones, about half a minute each:
+# see README "Learned baselines").
 baselines: $(VENV)/.train
 	$(VENV)/bin/graspenv train --env graspenv/TurnInPlace-v0 --algo sac --seed 0
 	$(VENV)/bin/graspenv train --env graspenv/SqueezeSlide-v0 --algo sac --seed 0
+	$(VENV)/bin/graspenv train --env graspenv/SqueezeHold-v0 --algo sac --seed 0
 
 # The speed table in the README: whole-run speeds, env steps/s beside panda-gym (in
 # the dev extra), resets, frame cost against contacts, compile times (about 2 min).

@@ -138,10 +138,10 @@ class ScriptedDemonstrations(BaseCallback):
             agents = [self.spec.build(layout_env) for _ in range(env.num_envs)]
         finally:
             layout_env.close()
-        # Environment i starts from seed + i; its later episodes continue its stream.
         import torch
 
         self._generator = torch.Generator().manual_seed(model.seed or 0)
+        # Environment i starts from seed + i; its later episodes continue its stream.
         env.seed(self.first_seed)
         done_episodes, self.successes = self._play(model, agents, self.episodes, demonstrate=True)
         self.logger.record("demonstrations/transitions", self.transitions)
@@ -193,8 +193,10 @@ class ScriptedDemonstrations(BaseCallback):
         done_episodes = successes = 0
         while done_episodes < episodes:
             labels = np.stack([agents[i].predict(obs[i])[0] for i in range(env.num_envs)])
-            self._states.append(obs.copy())
-            self._labels.append(model.policy.scale_action(labels))
+            scaled = model.policy.scale_action(labels)
+            if self.behaviour_cloning:  # kept only for the fits
+                self._states.append(obs.copy())
+                self._labels.append(scaled)
             actions = labels if demonstrate else model.predict(obs, deterministic=True)[0]
             new_obs: Any
             new_obs, rewards, dones, infos = env.step(actions)
@@ -205,10 +207,8 @@ class ScriptedDemonstrations(BaseCallback):
                     agents[i].reset()
                     done_episodes += 1
                     successes += bool(infos[i].get("is_success", False))
-            if demonstrate:
-                model.replay_buffer.add(
-                    obs, next_obs, model.policy.scale_action(actions), rewards, dones, infos
-                )
+            if demonstrate:  # the actions played are the labels
+                model.replay_buffer.add(obs, next_obs, scaled, rewards, dones, infos)
                 self.transitions += env.num_envs
             obs = new_obs
         return done_episodes, successes

@@ -501,11 +501,11 @@ class SceneConfig:
 #: from the speed-against-error frontier that ``graspenv bench`` measures and the
 #: grasp-space grid (README, "Speed against error", "Accuracy across the grasp
 #: space"). ``reference`` is the setting the benchmark's drift is measured against:
-#: objects in reduced coordinates (their contacts stiffened to match; the default's
-#: objects are the same since 2026-12-04, and so is its 0.3 mm a sub-step), the force
-#: clamp raised so that it does not cut the grip's friction short, twice the
-#: sub-steps and solver iterations. ``fast`` keeps the 50 iterations it was measured
-#: with (the default's 150 cost a quarter of its frame rate). A finer
+#: the default's body model (objects in reduced coordinates, contact ERP 0.4, the
+#: 20 N clamp: the default's since 2026-12-04, pinned here so that a scene file
+#: cannot make its reference coarser) with twice the sub-steps and solver
+#: iterations. ``fast`` keeps the 50 iterations it was measured with (150 cost the
+#: default's canonical turn about a third of its frame rate). A finer
 #: contour (2 mm) is not in it: with the particle mass fixed it doubles the grip's
 #: stiffness and normal force, and the turn got worse (0.88° against 0.19°), so
 #: refining it does not converge.

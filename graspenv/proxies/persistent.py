@@ -141,6 +141,9 @@ class PersistentProxies:
         self._world = world
         self._proxy = proxy
         self._spacing = spacing
+        # Farther than this from its anchor's particle, a new point is put down
+        # where it is (FAR_FROM_ANCHOR).
+        self._far = FAR_FROM_ANCHOR * max(spacing, 2.0 * world.pool.radius)
         self._dt = dt
         self._layers = layers
         self._cull = proxy.cull
@@ -252,8 +255,7 @@ class PersistentProxies:
             # particle diameters (the grid and the bench's default scenes were
             # unchanged by it).
             start = pool.positions(particles[anchors].reshape(-1)).reshape(-1, layers, 3)
-            reach = FAR_FROM_ANCHOR * max(self._spacing, 2.0 * pool.radius)
-            near = np.hypot(*(current[beside] - start[:, 0, :2]).T) <= reach
+            near = np.hypot(*(current[beside] - start[:, 0, :2]).T) <= self._far
             lost = np.concatenate([lost, beside[~near]])
             beside, start = beside[near], start[near]
         if beside.size:

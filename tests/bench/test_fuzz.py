@@ -71,9 +71,8 @@ def test_the_seeded_sample_keeps_its_record() -> None:
 #: two fingertips on its top whose contacts merge (6571), dragged to 1.06 times the
 #: speed bound by particles that raced along the merged contour (0.24 times now).
 HELD = (509, 911, 1969, 2371, 2701, 2934, 4125, 4876, 5965, 6416, 6571, 8716, 8861, 9984)
-FUZZ_CASES: dict[int, list[str]] = {seed: [] for seed in HELD}
 
 
-@pytest.mark.parametrize(("seed", "broken"), FUZZ_CASES.items(), ids=str)
-def test_the_named_fuzz_cases_keep_their_record(seed: int, broken: list[str]) -> None:
-    assert fuzz.play(seed).broken == broken
+@pytest.mark.parametrize("seed", HELD, ids=str)
+def test_the_named_fuzz_cases_keep_their_record(seed: int) -> None:
+    assert fuzz.play(seed).broken == []

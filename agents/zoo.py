@@ -73,6 +73,18 @@ class ScriptedDemonstrations(BaseCallback):
             needs ``behaviour_cloning``.
         dagger_episodes: the actor's episodes in each round, >= 1.
         critic_warmup: SAC critic updates with the actor fixed, >= 0.
+        cloning_loss: ``"likelihood"``: the fit maximises the demonstrated actions'
+            likelihood under the actor's distribution; ``"squared"``: it fits the
+            actor's deterministic action (the squashed mean) by squared error and
+            the spread by likelihood about it. Under likelihood alone the actor can
+            give up on states it finds hard by widening its spread there: the
+            SidePush clone stood still 3 mm from where the push starts, its mean
+            velocity 0 against the strategy's 0.4 and its spread 2.2.
+        noise: standard deviation of Gaussian noise added to the strategy's actions
+            while it demonstrates (action units, before clipping to ±1); the
+            states it then reaches are labelled with its clean actions (DART:
+            Laskey et al., CoRL 2017), so the demonstrations show how the strategy
+            recovers from the small errors a clone makes. 0: none.
         verbose: 1 prints what was added and each DAgger round.
 
     The fit draws its batches from the labelled states with a generator of its own
@@ -91,6 +103,8 @@ class ScriptedDemonstrations(BaseCallback):
         dagger: int = 0,
         dagger_episodes: int = 20,
         critic_warmup: int = 0,
+        cloning_loss: str = "likelihood",
+        noise: float = 0.0,
         verbose: int = 1,
     ) -> None:
         super().__init__(verbose)
@@ -105,6 +119,11 @@ class ScriptedDemonstrations(BaseCallback):
                 raise ValueError(f"ScriptedDemonstrations: {key} must be >= 0, got {value}")
         if dagger and not behaviour_cloning:
             raise ValueError("ScriptedDemonstrations: dagger needs behaviour_cloning > 0")
+        if cloning_loss not in ("likelihood", "squared"):
+            raise ValueError(
+                "ScriptedDemonstrations: cloning_loss must be 'likelihood' or 'squared', "
+                f"got {cloning_loss!r}"
+            )
         if dagger_episodes < 1:
             raise ValueError(
                 f"ScriptedDemonstrations: dagger_episodes must be >= 1, got {dagger_episodes}"
@@ -113,6 +132,11 @@ class ScriptedDemonstrations(BaseCallback):
         self.strategy, self.episodes, self.first_seed = strategy, episodes, seed
         self.behaviour_cloning, self.critic_warmup = behaviour_cloning, critic_warmup
         self.dagger, self.dagger_episodes = dagger, dagger_episodes
+        self.cloning_loss = cloning_loss
+        if not (np.isfinite(noise) and noise >= 0):
+            raise ValueError(f"ScriptedDemonstrations: noise must be >= 0, got {noise}")
+        self.noise = float(noise)
+        self._noise_rng = np.random.default_rng(seed)
         self.transitions = self.successes = 0
         # What the actor is fitted to: states and the strategy's (scaled) actions.
         self._states: list[NDArray[np.float32]] = []
@@ -189,29 +213,56 @@ class ScriptedDemonstrations(BaseCallback):
         env = self.training_env
         for agent in agents:
             agent.reset()
-        obs: Any = env.reset()  # state observations: an array, one row per environment
+        obs: Any = env.reset()  # one row per environment (an array, or a dict of them)
         done_episodes = successes = 0
         while done_episodes < episodes:
-            labels = np.stack([agents[i].predict(obs[i])[0] for i in range(env.num_envs)])
+            labels = self._labels_for(agents, obs)
             scaled = model.policy.scale_action(labels)
             if self.behaviour_cloning:  # kept only for the fits
-                self._states.append(obs.copy())
+                self._states.append(_copy(obs))
                 self._labels.append(scaled)
-            actions = labels if demonstrate else model.predict(obs, deterministic=True)[0]
+            if demonstrate:
+                actions = labels
+                if self.noise:  # DART: play a perturbed action, keep the clean label
+                    actions = np.clip(
+                        labels + self._noise_rng.normal(0.0, self.noise, labels.shape), -1, 1
+                    ).astype(np.float32)
+            else:
+                actions = model.predict(obs, deterministic=True)[0]
             new_obs: Any
             new_obs, rewards, dones, infos = env.step(actions)
-            next_obs = new_obs.copy()
+            next_obs = _copy(new_obs)
             for i, done in enumerate(dones):
                 if done:
-                    next_obs[i] = infos[i]["terminal_observation"]
+                    _set_row(next_obs, i, infos[i]["terminal_observation"])
                     agents[i].reset()
                     done_episodes += 1
                     successes += bool(infos[i].get("is_success", False))
-            if demonstrate:  # the actions played are the labels
-                model.replay_buffer.add(obs, next_obs, scaled, rewards, dones, infos)
+            if demonstrate:  # the actions played (the labels, unless perturbed)
+                played = scaled if not self.noise else model.policy.scale_action(actions)
+                model.replay_buffer.add(obs, next_obs, played, rewards, dones, infos)
                 self.transitions += env.num_envs
             obs = new_obs
         return done_episodes, successes
+
+    def _labels_for(self, agents: list[Any], obs: NDArray[np.float32]) -> NDArray[np.float32]:
+        """The strategy's action in each environment's state, in the policy's terms.
+
+        A wrapper that replaces the state vector and the action's frame
+        (:class:`~graspenv_agents.wrappers.GoalFrame`) keeps the state in ``state``
+        and turns the strategy's action into its own with ``policy_action``; any
+        other observation holds the state vector at its start.
+        """
+        env = self.training_env
+        if not env.has_attr("policy_action"):
+            return np.stack([agents[i].predict(_row(obs, i))[0] for i in range(env.num_envs)])
+        states = env.get_attr("state")
+        return np.stack(
+            [
+                env.env_method("policy_action", agents[i].predict(states[i])[0], indices=[i])[0]
+                for i in range(env.num_envs)
+            ]
+        )
 
     def _clone(self, model: Any) -> float:
         """Maximise the log-likelihood of the strategy's actions, in every state
@@ -220,7 +271,8 @@ class ScriptedDemonstrations(BaseCallback):
         import torch
 
         actor = model.actor
-        states = torch.as_tensor(np.concatenate(self._states), dtype=torch.float32)
+        states = _stack(self._states)
+        count = len(next(iter(states.values()))) if isinstance(states, dict) else len(states)
         # Saturated actions (the strategies clip to ±1) would put atanh at infinity:
         # keep them just inside.
         labels = torch.as_tensor(np.concatenate(self._labels), dtype=torch.float32)
@@ -228,10 +280,17 @@ class ScriptedDemonstrations(BaseCallback):
         loss = torch.zeros(())
         actor.set_training_mode(True)
         for _ in range(self.behaviour_cloning):
-            rows = torch.randint(len(states), (model.batch_size,), generator=self._generator)
-            mean, log_std, _ = actor.get_action_dist_params(states[rows])
-            distribution = actor.action_dist.proba_distribution(mean, log_std)
-            loss = -distribution.log_prob(labels[rows]).mean()
+            rows = torch.randint(count, (model.batch_size,), generator=self._generator)
+            mean, log_std, _ = actor.get_action_dist_params(_take(states, rows))
+            if self.cloning_loss == "likelihood":
+                distribution = actor.action_dist.proba_distribution(mean, log_std)
+                loss = -distribution.log_prob(labels[rows]).mean()
+            else:
+                # The squashed mean fitted by squared error, the spread by likelihood
+                # about that mean: the mean cannot buy its misses with a wider spread.
+                squared = ((torch.tanh(mean) - labels[rows]) ** 2).sum(dim=1).mean()
+                distribution = actor.action_dist.proba_distribution(mean.detach(), log_std)
+                loss = squared - distribution.log_prob(labels[rows]).mean()
             actor.optimizer.zero_grad()
             loss.backward()
             actor.optimizer.step()
@@ -273,3 +332,41 @@ class ScriptedDemonstrations(BaseCallback):
 
     def _on_step(self) -> bool:
         return True
+
+
+# Observations are an array with a row per environment or, for ``obs_mode="mask"``,
+# a dict of such arrays (the mask, channel first after SB3's transpose, and the
+# state vector).
+
+
+def _copy(obs: Any) -> Any:
+    return {k: v.copy() for k, v in obs.items()} if isinstance(obs, dict) else obs.copy()
+
+
+def _row(obs: Any, i: int) -> Any:
+    return {k: v[i] for k, v in obs.items()} if isinstance(obs, dict) else obs[i]
+
+
+def _set_row(obs: Any, i: int, row: Any) -> None:
+    if isinstance(obs, dict):
+        for k in obs:
+            obs[k][i] = row[k]
+    else:
+        obs[i] = row
+
+
+def _stack(observations: list[Any]) -> Any:
+    """The stored observations as one tensor (or a dict of tensors); masks stay
+    uint8 until the policy's own preprocessing scales them."""
+    import torch
+
+    if isinstance(observations[0], dict):
+        return {
+            k: torch.as_tensor(np.concatenate([o[k] for o in observations]))
+            for k in observations[0]
+        }
+    return torch.as_tensor(np.concatenate(observations), dtype=torch.float32)
+
+
+def _take(states: Any, rows: Any) -> Any:
+    return {k: v[rows] for k, v in states.items()} if isinstance(states, dict) else states[rows]

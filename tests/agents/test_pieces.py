@@ -11,7 +11,7 @@ import pytest
 
 from graspenv.plots import bar_chart, line_chart
 from graspenv_agents.hyperparams import default_file, load_hyperparams, write_hyperparams
-from graspenv_agents.wrappers import WRAPPERS, RelativeGoal
+from graspenv_agents.wrappers import WRAPPERS, GoalFrame, RelativeGoal
 
 
 def test_an_entry_is_read_as_the_zoo_reads_it(tmp_path: Path) -> None:
@@ -61,6 +61,10 @@ def test_scripted_demonstrations_need_a_replay_buffer_and_plain_observations() -
         ScriptedDemonstrations("pinch-and-turn", behaviour_cloning=1, dagger=1, dagger_episodes=0)
     with pytest.raises(ValueError, match="unknown scripted strategy"):
         ScriptedDemonstrations("juggle")
+    with pytest.raises(ValueError, match="cloning_loss"):
+        ScriptedDemonstrations("pinch-and-turn", cloning_loss="huber")
+    with pytest.raises(ValueError, match="noise"):
+        ScriptedDemonstrations("pinch-and-turn", noise=-0.1)
 
     def make() -> gym.Env:
         return gym.make("graspenv/TurnInPlace-v0")
@@ -155,3 +159,109 @@ def test_charts_draw_their_series(tmp_path: Path) -> None:
     heights = [blue[:, c].sum() for c in cols_blue]
     assert max(heights) > 3 * min(h for h in heights if h > 20)
     assert np.any(np.all(line == (178, 114, 0), axis=-1))
+
+
+def test_goal_frame_puts_the_goal_on_its_x_axis_and_turns_actions_back() -> None:
+    """The goal lies on the frame's +x axis at the true distance, a finger's frame
+    position turns back into its true offset from the object, and an action in the
+    table's frame survives the round trip through the frame."""
+    env = GoalFrame(gym.make("graspenv/SidePush-v0"))
+    try:
+        obs, _ = env.reset(seed=7)
+        layout = env.layout
+        state = env.state
+        xy, goal = state[layout["object_position"]][:2], state[layout["goal"]][:2]
+        offset = goal - xy
+        assert obs[0] == pytest.approx(10 * np.hypot(*offset), abs=1e-5)
+        angle = math.atan2(offset[1], offset[0])
+        c, s = math.cos(angle), math.sin(angle)
+        fingers = obs[10:14].reshape(2, 2) / 10.0  # frame, metres
+        back = fingers @ np.array([[c, s], [-s, c]])  # rotate by +angle
+        truth = state[layout["finger_positions"]].reshape(2, 2) - xy
+        np.testing.assert_allclose(back, truth, atol=1e-6)
+        world = np.array([0.3, -0.2, 1.0, -0.5, 0.1, -1.0], np.float32)
+        framed = env.policy_action(world)
+        assert not np.allclose(framed, world)  # the goal is not along the table's x
+        np.testing.assert_allclose(env._rotate(framed, angle), world, atol=1e-6)
+        assert env.observation_space.contains(obs)
+    finally:
+        env.close()
+
+
+def test_goal_frame_refuses_what_it_cannot_frame() -> None:
+    with pytest.raises(ValueError, match="action_mode='fingers'"):
+        GoalFrame(gym.make("graspenv/TurnInPlace-v0"))
+    with pytest.raises(ValueError, match="obs_mode='state'"):
+        GoalFrame(gym.make("graspenv/SidePush-v0", obs_mode="mask"))
+
+
+def test_demonstrations_in_the_goal_frame_push_the_box_home() -> None:
+    """Through GoalFrame the strategy's actions are turned into the frame before they
+    are played: played back, they still push every box to its goal. With DART's
+    noise the played actions differ from the labels by about the noise."""
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3 import SAC
+    from stable_baselines3.common.vec_env import DummyVecEnv
+
+    from graspenv_agents.zoo import ScriptedDemonstrations
+
+    def make() -> gym.Env:
+        return GoalFrame(gym.make("graspenv/SidePush-v0"))
+
+    for noise in (0.0, 0.3):
+        model = SAC(
+            "MlpPolicy", DummyVecEnv([make]), buffer_size=2000, learning_starts=10**6,
+            policy_kwargs={"net_arch": [16, 16]}, seed=0,
+        )  # fmt: skip
+        demos = ScriptedDemonstrations(
+            "push-from-behind", episodes=2, behaviour_cloning=5, cloning_loss="squared",
+            noise=noise,
+        )  # fmt: skip
+        try:
+            model.learn(1, callback=demos)
+            assert demos.successes == 2
+            played = model.replay_buffer.actions[: demos.transitions, 0]
+            labels = np.concatenate(demos._labels)
+            gap = np.abs(played - labels)
+            if noise == 0.0:
+                assert np.allclose(gap, 0.0)
+            else:
+                assert 0.1 < float(gap.mean()) < 0.3  # E|N(0, 0.3)| = 0.24, less where clipped
+        finally:
+            model.get_env().close()
+
+
+def test_demonstrations_fit_a_policy_on_the_contact_mask() -> None:
+    """obs_mode="mask" observations (the mask and the state vector) are stored as a
+    dict and fitted through the policy's CNN."""
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3 import SAC
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import VecTransposeImage
+
+    from graspenv_agents.zoo import ScriptedDemonstrations
+
+    env = VecTransposeImage(
+        make_vec_env("graspenv/SqueezeHold-v0", n_envs=1, env_kwargs={"obs_mode": "mask"})
+    )
+    model = SAC(
+        "MultiInputPolicy", env, buffer_size=500, learning_starts=10**6, batch_size=8,
+        policy_kwargs={"net_arch": [8], "features_extractor_kwargs": {"cnn_output_dim": 8}},
+        seed=0,
+    )  # fmt: skip
+    demos = ScriptedDemonstrations(
+        "firm-hold", episodes=1, behaviour_cloning=3, cloning_loss="squared"
+    )
+    try:
+        before = [p.detach().clone() for p in model.actor.features_extractor.parameters()]
+        model.learn(1, callback=demos)
+        assert set(demos._states[0]) == {"mask", "state"}
+        assert demos._states[0]["mask"].shape == (1, 1, 72, 96)  # channel first, one env
+        after = list(model.actor.features_extractor.parameters())
+        changed = [
+            not np.allclose(b.numpy(), a.detach().numpy())
+            for b, a in zip(before, after, strict=True)
+        ]
+        assert any(changed)
+    finally:
+        env.close()

@@ -29,28 +29,35 @@ from .train import train
 
 __all__ = ["COUNTS", "clone_curve"]
 
-#: Demonstration counts the curve is drawn at (the shipped clones saw 50).
+#: Demonstration counts the curve is drawn at, with the entry's own count added
+#: when it is not among them (SidePush's clone saw 100).
 COUNTS = (1, 2, 5, 10, 20, 50)
 
 _CALLBACK = "graspenv_agents.zoo.ScriptedDemonstrations"
 
 
-def _with_episodes(entry: dict[str, Any], episodes: int) -> dict[str, Any]:
-    """The entry with its ScriptedDemonstrations playing ``episodes`` episodes."""
-    entry = copy.deepcopy(entry)
+def _demonstrations(entry: dict[str, Any]) -> dict[str, Any]:
+    """The keyword arguments of the entry's ScriptedDemonstrations (a clone's)."""
     for callback in entry.get("callback", []):
         if isinstance(callback, dict) and _CALLBACK in callback:
             if not callback[_CALLBACK].get("behaviour_cloning"):
                 break
-            callback[_CALLBACK]["episodes"] = episodes
-            return entry
+            arguments: dict[str, Any] = callback[_CALLBACK]
+            return arguments
     raise ValueError(f"the entry names no {_CALLBACK} with behaviour_cloning: not a clone")
+
+
+def _with_episodes(entry: dict[str, Any], episodes: int) -> dict[str, Any]:
+    """The entry with its ScriptedDemonstrations playing ``episodes`` episodes."""
+    entry = copy.deepcopy(entry)
+    _demonstrations(entry)["episodes"] = episodes
+    return entry
 
 
 def clone_curve(
     env_id: str,
     out: str | Path,
-    counts: Sequence[int] = COUNTS,
+    counts: Sequence[int] | None = None,
     seeds: Sequence[int] = range(1000, 1030),
     seed: int = 0,
     config: str | Path | None = None,
@@ -63,7 +70,8 @@ def clone_curve(
     Args:
         env_id: a graspenv environment id whose entry is a clone.
         out: folder for the CSV and the chart.
-        counts: demonstration counts, each >= 1.
+        counts: demonstration counts, each >= 1 (default: :data:`COUNTS` and the
+            entry's own).
         seeds: evaluation episodes' seeds.
         seed: the training seed.
         config: the SAC hyperparameter file (default ``agents/hyperparams/sac.yml``).
@@ -75,11 +83,13 @@ def clone_curve(
     Raises:
         ValueError: the entry is not a clone, or a count is below 1.
     """
-    if not counts or min(counts) < 1:
+    if counts is not None and (not counts or min(counts) < 1):
         raise ValueError(f"counts must be >= 1, got {list(counts)}")
     path = Path(config) if config is not None else default_file("sac")
     entry = load_hyperparams(env_id, "sac", path)
-    _with_episodes(entry, 1)  # a clone's entry, or stop before any training
+    own = int(_demonstrations(entry).get("episodes", 50))  # or stop: not a clone
+    if counts is None:
+        counts = sorted({*COUNTS, own})
     say = progress or (lambda line: print(line, file=sys.stderr, flush=True))
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

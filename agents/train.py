@@ -117,6 +117,15 @@ def run_zoo(argv: Sequence[str]) -> None:
         sys.argv = saved
 
 
+def _near(path: Path) -> Path:
+    """``path`` relative to the working directory when it lies under it, so that the
+    run record of a run made in a clone names its files as every clone has them."""
+    try:
+        return path.resolve().relative_to(Path.cwd().resolve())
+    except ValueError:
+        return path
+
+
 def train(
     env_id: str,
     algo: str,
@@ -150,11 +159,11 @@ def train(
         # way; the `graspenv` command turns this error into "install the training extra".
         if importlib.util.find_spec(name) is None:
             raise ModuleNotFoundError(f"no module named {name!r}", name=name)
-    path = Path(config) if config is not None else default_file(algo)
+    path = _near(Path(config) if config is not None else default_file(algo))
     settings = load_hyperparams(env_id, algo, path)  # fail before the zoo starts
     if steps is not None and steps < 1:
         raise ValueError(f"steps must be positive, got {steps}")
-    out = Path(out)
+    out = _near(Path(out))
     # The zoo's own arguments: the file's entry, one torch thread (the cores go to
     # the environments), subprocess environments when there are several.
     argv = [
@@ -185,7 +194,9 @@ def train(
     start = time.perf_counter()
     run_zoo(argv)
     wall = time.perf_counter() - start
-    folder, tensorboard = (_newest(where, before) for where in (runs, logs))
+    # Run folders are named after the environment; its TensorBoard folder is its own.
+    folder = _newest(runs, before, env_id.replace("/", "-") + "_")
+    tensorboard = _newest(logs, before)
     if folder is None:
         raise RuntimeError(f"the zoo wrote no run folder under {runs}")
     name = env_id.replace("/", "-")
@@ -215,10 +226,11 @@ def train(
     return TrainResult(folder, int(model.num_timesteps), wall, final)
 
 
-def _newest(where: Path, before: set[Path]) -> Path | None:
-    """The folder the zoo made in ``where`` during this run."""
-    new = sorted(set(where.glob("*")) - before, key=lambda p: p.stat().st_mtime)
-    return new[-1] if new else None
+def _newest(where: Path, before: set[Path], prefix: str = "") -> Path | None:
+    """The newest folder named ``prefix…`` that the zoo made in ``where`` during this
+    run (runs for other environments may share the log folder)."""
+    made = [p for p in set(where.glob("*")) - before if p.name.startswith(prefix)]
+    return max(made, key=lambda p: p.stat().st_mtime) if made else None
 
 
 def _write_json(path: Path, data: dict[str, Any]) -> None:

@@ -22,7 +22,11 @@ def test_the_learned_baselines_are_shipped() -> None:
         "graspenv/TurnInPlace-v0",
         "graspenv/SqueezeSlide-v0",
         "graspenv/SqueezeHold-v0",
+        "graspenv/SidePush-v0",
+        "graspenv/TopRub-v0",
     } <= homes
+    algos = {json.loads((p / "run.json").read_text())["algo"] for p in FOLDERS}
+    assert algos == {"sac", "ppo"}  # an on-policy baseline among them
 
 
 @pytest.mark.parametrize("folder", FOLDERS, ids=lambda p: p.name)
@@ -41,4 +45,6 @@ def test_compare_runs_the_learned_policies_in_parallel(tmp_path: Path) -> None:
     from graspenv_agents.compare import compare
 
     result = compare(None, [str(p) for p in FOLDERS], 1, 1000, tmp_path, workers=2)
-    assert {s["agent"] for s in result.summaries} == {f"SAC ({p.name})" for p in FOLDERS}
+    algos = {p.name: json.loads((p / "run.json").read_text())["algo"] for p in FOLDERS}
+    expected = {f"{algos[p.name].upper()} ({p.name})" for p in FOLDERS}
+    assert {s["agent"] for s in result.summaries} == expected

@@ -82,9 +82,8 @@ class PushFromBehind(ScriptedAgent):
     stop_distance = 0.006
     realign = 0.02
     arrived = 0.003
-
-    def reset(self) -> None:
-        self.phase = "approach"
+    #: The phase of the last action (for reading; nothing depends on it).
+    phase = "approach"
 
     def _phase(self, state: State, forward: NDArray[np.float64], distance: float) -> str:
         if distance < self.stop_distance:

@@ -24,6 +24,7 @@ def test_the_learned_baselines_are_shipped() -> None:
         "graspenv/SqueezeHold-v0",
         "graspenv/SidePush-v0",
         "graspenv/TopRub-v0",
+        "graspenv/CatchBall-v0",
     } <= homes
     algos = {json.loads((p / "run.json").read_text())["algo"] for p in FOLDERS}
     assert algos == {"sac", "ppo"}  # an on-policy baseline among them

@@ -17,8 +17,8 @@ named in a file's ``callback`` list with its keyword arguments::
 Before the first training step it plays that many episodes of the strategy in the
 training environments themselves (so with the file's wrapper and arguments), adds
 every transition to the replay buffer, and resets the environments to where
-training would have started. Two optional head starts follow, on those
-transitions alone:
+training would have started. Optional head starts follow, on those transitions
+alone:
 
 - ``behaviour_cloning: N``: N gradient steps of maximum likelihood of the
   demonstrated actions under the actor's own (squashed Gaussian) distribution, so
@@ -27,11 +27,16 @@ transitions alone:
 - ``dagger: R`` (with ``behaviour_cloning``): then R rounds of DAgger (Ross, Gordon
   and Bagnell, AISTATS 2011): the cloned actor plays ``dagger_episodes`` episodes
   itself, the strategy says what it would have done in every state the actor
-  reached (its own phase kept along the actor's episode), those labels join the
+  reached (the strategies answer from the state alone), those labels join the
   demonstrations and the actor is fitted again. A clone alone drifts off the
-  states the strategy visits and has never seen what to do there; on SidePush a
-  clone alone pushed no box (0 of 30 episodes). The ``imitation`` library has
-  DAgger but pins gymnasium 0.29 and stable-baselines3 2.2, so the loop is here;
+  states the strategy visits and has never seen what to do there. The
+  ``imitation`` library has DAgger but pins gymnasium 0.29 and stable-baselines3
+  2.2, so the loop is here;
+- ``cloning_loss: squared``: the fit moves the actor's deterministic action by
+  squared error (its spread by likelihood about it), where likelihood alone let it
+  widen its spread instead;
+- ``noise: σ``: the strategy demonstrates with Gaussian noise on its actions and
+  its clean actions label the states reached (DART), so a clone sees recoveries;
 - ``critic_warmup: N``: then N steps of SAC's own critic update with the actor held
   fixed, so that the actor's first updates follow a critic that has seen the
   demonstrations' returns rather than a random one (a cloned actor following a

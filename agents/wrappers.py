@@ -23,6 +23,17 @@ from graspenv.geometry import yaw_of
 __all__ = ["WRAPPERS", "GoalFrame", "RelativeGoal"]
 
 
+def _state_layout(env: gym.Env[Any, Any], wrapper: str) -> tuple[dict[str, slice], int]:
+    """The state vector's named slices and the hand's finger count, for a wrapper
+    that needs ``obs_mode="state"``."""
+    unwrapped: Any = env.unwrapped
+    if getattr(unwrapped, "obs_mode", None) != "state":
+        raise ValueError(f"{wrapper} needs obs_mode='state'")
+    layout: dict[str, slice] = dict(unwrapped.observation_layout)
+    fingers = layout["finger_positions"]
+    return layout, (fingers.stop - fingers.start) // 2
+
+
 class RelativeGoal(gym.ObservationWrapper[NDArray[np.float32], Any, NDArray[np.float32]]):
     """Appends to a ``"state"`` observation: the goal relative to the object (x, y in
     decimetres; sine and cosine of the remaining turn) and each finger's position
@@ -30,13 +41,8 @@ class RelativeGoal(gym.ObservationWrapper[NDArray[np.float32], Any, NDArray[np.f
 
     def __init__(self, env: gym.Env[Any, Any]) -> None:
         super().__init__(env)
+        self.layout, self.n_fingers = _state_layout(env, "RelativeGoal")
         unwrapped: Any = env.unwrapped
-        if getattr(unwrapped, "obs_mode", None) != "state":
-            raise ValueError("RelativeGoal needs obs_mode='state'")
-        self.layout: dict[str, slice] = dict(unwrapped.observation_layout)
-        self.n_fingers = (
-            self.layout["finger_positions"].stop - self.layout["finger_positions"].start
-        ) // 2
         # CatchBall's goal is a velocity and a hold, not a pose: nothing to add.
         self.goal_is_pose = bool(getattr(unwrapped.task, "pose_goal", True))
         base = env.observation_space
@@ -93,21 +99,13 @@ class GoalFrame(gym.Wrapper[NDArray[np.float32], NDArray[np.float32], Any, Any])
 
     def __init__(self, env: gym.Env[Any, Any]) -> None:
         super().__init__(env)
+        self.layout, self.n_fingers = _state_layout(env, "GoalFrame")
         unwrapped: Any = env.unwrapped
-        if getattr(unwrapped, "obs_mode", None) != "state":
-            raise ValueError("GoalFrame needs obs_mode='state'")
         if getattr(unwrapped, "action_mode", None) != "fingers":
             raise ValueError("GoalFrame needs action_mode='fingers'")
         if not bool(getattr(unwrapped.task, "pose_goal", True)):
             raise ValueError("GoalFrame needs a task whose goal is a pose")
-        self.layout: dict[str, slice] = dict(unwrapped.observation_layout)
-        self.n_fingers = (
-            self.layout["finger_positions"].stop - self.layout["finger_positions"].start
-        ) // 2
         self._kept = ("finger_touching", "finger_force", "finger_contacts", "slip")
-        missing = [name for name in self._kept if name not in self.layout]
-        if missing:
-            raise ValueError(f"GoalFrame: the state vector has no {missing}")
         size = (
             10
             + 2 * self.n_fingers
@@ -136,8 +134,8 @@ class GoalFrame(gym.Wrapper[NDArray[np.float32], NDArray[np.float32], Any, Any])
     def _rotate(self, action: NDArray[np.floating[Any]], angle: float) -> NDArray[np.float32]:
         per_finger = np.array(action, dtype=np.float64).reshape(self.n_fingers, 3)
         c, s = math.cos(angle), math.sin(angle)
-        vx, vy = per_finger[:, 0].copy(), per_finger[:, 1].copy()
-        per_finger[:, 0], per_finger[:, 1] = c * vx - s * vy, s * vx + c * vy
+        vx, vy = per_finger[:, 0], per_finger[:, 1]
+        per_finger[:, 0], per_finger[:, 1] = c * vx - s * vy, s * vx + c * vy  # both sides first
         return per_finger.ravel().astype(np.float32)
 
     def _features(self, observation: NDArray[np.float32]) -> NDArray[np.float32]:

@@ -157,6 +157,9 @@ class ScriptedDemonstrations(BaseCallback):
         if model.get_vec_normalize_env() is not None:
             raise ValueError("ScriptedDemonstrations does not support normalize: true")
         env = self.training_env
+        # Whether the wrapper gives the policy a frame of its own (GoalFrame): asked
+        # once, not every step.
+        self._framed = bool(env.has_attr("policy_action"))
         # The strategies read the state vector through the environment's named
         # slices; a wrapper appending values (RelativeGoal) leaves them in place.
         # Built on an environment of the same spec (its layout and action mode),
@@ -259,7 +262,7 @@ class ScriptedDemonstrations(BaseCallback):
         other observation holds the state vector at its start.
         """
         env = self.training_env
-        if not env.has_attr("policy_action"):
+        if not self._framed:
             return np.stack([agents[i].predict(_row(obs, i))[0] for i in range(env.num_envs)])
         states = env.get_attr("state")
         return np.stack(

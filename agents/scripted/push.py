@@ -85,25 +85,17 @@ class PushFromBehind(ScriptedAgent):
     #: The phase of the last action (for reading; nothing depends on it).
     phase = "approach"
 
-    def _phase(self, state: State, forward: NDArray[np.float64], distance: float) -> str:
-        if distance < self.stop_distance:
-            return "done"
+    def _phase(
+        self, state: State, forward: NDArray[np.float64], places: NDArray[np.float64]
+    ) -> str:
         box, fingers = state.object_xy, state.fingers
         if bool(np.all(state["finger_touching"] > 0.5)):
             centre = fingers.mean(axis=0)
             lateral = float(np.dot(centre - box, _left(forward)))
             on_line = abs(lateral) <= self.realign and float(np.dot(box - centre, forward)) >= 0
             return "push" if on_line else "approach"
-        targets = self._places(box, forward)
-        near = float(np.max(np.linalg.norm(fingers - targets, axis=1))) < self.arrived
+        near = float(np.max(np.linalg.norm(fingers - places, axis=1))) < self.arrived
         return "push" if near else "approach"
-
-    def _places(
-        self, box: NDArray[np.float64], forward: NDArray[np.float64]
-    ) -> NDArray[np.float64]:
-        """Where the fingers start a push: side by side, behind the box."""
-        offsets = self.spread * np.array([1.0, -1.0])
-        return box - self.standoff * forward + offsets[:, None] * _left(forward)
 
     def act(self, state: State) -> NDArray[np.float64]:
         box = state.object_xy
@@ -112,15 +104,17 @@ class PushFromBehind(ScriptedAgent):
         distance = float(np.linalg.norm(to_goal))
         forward = _unit(to_goal)
         across = _left(forward)
-        self.phase = self._phase(state, forward, distance)
+        # Where the fingers start a push: side by side, behind the box.
+        offsets = self.spread * np.array([1.0, -1.0])
+        places = box - self.standoff * forward + offsets[:, None] * across
+        done = distance < self.stop_distance
+        self.phase = "done" if done else self._phase(state, forward, places)
         velocity = np.zeros_like(fingers)
         if self.phase == "approach":
-            targets = self._places(box, forward)
-            for i, (finger, target) in enumerate(zip(fingers, targets, strict=True)):
+            for i, (finger, target) in enumerate(zip(fingers, places, strict=True)):
                 velocity[i] = _toward(finger, target, 1.0)
         elif self.phase == "push":
             speed = self.push_speed.at(distance)
-            offsets = self.spread * np.array([1.0, -1.0])
             for i, finger in enumerate(fingers):
                 side = float(np.dot(finger - box, across)) - offsets[i]
                 correction = -self.lateral_gain * side / STEP

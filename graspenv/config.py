@@ -260,7 +260,10 @@ class ProxyConfig:
             footprint on its top face.
         penetration_margin: how deep inside a footprint, metres, a contour point must
             be for the penetration limit to put its particle on the top face. Keep it
-            about 1 mm above the deepest squeeze that should hold an object.
+            about 1 mm above the deepest squeeze that should hold an object: 7 mm, for
+            the grasp-space grid's deepest squeeze of 6 mm (at 5 mm the deepest points
+            of a 6 mm squeeze went on top, unevenly on the two sides, and the box slid
+            2.4 % off its path).
         cull: give a physics body only to contour points that could touch an object
             soon; the others stay plain contour points, still matched from frame to
             frame, and get a body as they come near (model only what a scene needs).
@@ -273,6 +276,13 @@ class ProxyConfig:
             contacts' centroids and apply it to previous points before matching.
         predicted_resampling: resample a continuing contour starting from the
             predicted previous points, so points do not jitter along the contour.
+        follow_points: with ``predicted_resampling``, put each predicted point where
+            it lands on the new outline (the outline's nearest point), filling gaps
+            and dropping crowded points, instead of resampling evenly from the first
+            one. Evenly spaced points slide along a round fingertip's outline as its
+            pixelated perimeter changes from frame to frame (about 0.15 mm a frame
+            on an 8 mm tip), drift by degrees over a turn, and shear the object
+            (README, "Points that land where the contact moved them").
         smoothing: gain of an alpha-beta filter on each followed contour point (1 =
             off, the points as the contour gives them): a point moves this share of
             the way from where its own velocity predicts it to where it is seen. For
@@ -298,12 +308,13 @@ class ProxyConfig:
     stack_spacing: float = 0.004
     down_force: float = 0.05
     penetration_limit: bool = True
-    penetration_margin: float = 0.005
+    penetration_margin: float = 0.007
     cull: bool = True
     cull_margin: float = 0.004
     rigid_height: float = 0.01
     track_hand_rotation: bool = True
     predicted_resampling: bool = True
+    follow_points: bool = True
     smoothing: float = 1.0
     smoothing_gate: float = 0.003
     instant_stride: int = 2

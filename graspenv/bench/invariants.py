@@ -17,8 +17,8 @@ worst value of every invariant (:class:`Worst`) and the frames that broke one
      commands v* = d / Δt towards it (Δt: ``physics.control_time``, or the sub-step
      if longer); the deepest a particle is held before the default penetration
      limit lifts it is the default ``proxy.penetration_margin``
-     (:data:`REBOUND_DEPTH`, 5 mm), so the rebound is ``REBOUND_DEPTH / Δt``
-     (1.2 m/s at the default Δt of 1/240 s);
+     (:data:`REBOUND_DEPTH`, 7 mm), so the rebound is ``REBOUND_DEPTH / Δt``
+     (1.68 m/s at the default Δt of 1/240 s);
    - *gravity*: an object that has dropped by Δz below its start may have gained
      sqrt(2 g Δz) by falling (off the table edge, 0.75 m to the floor: 3.8 m/s).
 

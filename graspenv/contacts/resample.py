@@ -296,10 +296,9 @@ class _Edges(NamedTuple):
 
 
 @njit
-def resample_kernel(polylines: Polylines, spacing: float, starts: NDArray[np.float64]) -> Polylines:
-    """:func:`resample_closed_batch` once its arguments are checked; raises its
-    ValueError for a polyline of zero perimeter (in the per-frame stages that cannot
-    happen: every contact outline encloses an area)."""
+def _edges(polylines: Polylines) -> tuple[_Edges, NDArray[np.float64]]:
+    """Each polyline's edges and its perimeter; raises ValueError for a polyline of
+    zero perimeter."""
     points, bounds = polylines
     count = len(bounds) - 1
     total = len(points)
@@ -307,7 +306,6 @@ def resample_kernel(polylines: Polylines, spacing: float, starts: NDArray[np.flo
     length = np.empty(total)
     arc = np.empty(total)
     perimeter = np.empty(count)
-    sizes = np.empty(count, np.intp)
     for c in range(count):
         lo, hi = bounds[c], bounds[c + 1]
         along = 0.0
@@ -321,8 +319,35 @@ def resample_kernel(polylines: Polylines, spacing: float, starts: NDArray[np.flo
         perimeter[c] = along
         if not along > 0.0:
             raise ValueError("polyline has zero perimeter; it needs at least two distinct points")
-        sizes[c] = max(int(np.rint(along / spacing)), 3)
-    edges = _Edges(points, step, length, arc)
+    return _Edges(points, step, length, arc), perimeter
+
+
+@njit
+def _point_at(edges: _Edges, lo: int, hi: int, target: float, out: NDArray[np.float64]) -> None:
+    """The point at arc position ``target`` (within one perimeter) of polyline
+    ``lo:hi``, written to ``out`` (2,)."""
+    points, step, length, arc = edges
+    # side="right" skips zero-length segments (repeated vertices): a target sitting
+    # exactly on a vertex is taken from the segment that leaves it.
+    found = int(np.searchsorted(arc[lo:hi], target, side="right"))
+    segment = lo + min(found - 1, hi - lo - 1)
+    edge = length[segment]
+    fraction = (target - arc[segment]) / (edge if edge > 0.0 else 1.0)
+    out[0] = points[segment, 0] + fraction * step[segment, 0]
+    out[1] = points[segment, 1] + fraction * step[segment, 1]
+
+
+@njit
+def resample_kernel(polylines: Polylines, spacing: float, starts: NDArray[np.float64]) -> Polylines:
+    """:func:`resample_closed_batch` once its arguments are checked; raises its
+    ValueError for a polyline of zero perimeter (in the per-frame stages that cannot
+    happen: every contact outline encloses an area)."""
+    bounds = polylines.bounds
+    count = len(bounds) - 1
+    edges, perimeter = _edges(polylines)
+    sizes = np.empty(count, np.intp)
+    for c in range(count):
+        sizes[c] = max(int(np.rint(perimeter[c] / spacing)), 3)
     out_bounds = np.zeros(count + 1, np.intp)
     out_bounds[1:] = np.cumsum(sizes)
     out = np.empty((out_bounds[-1], 2))
@@ -332,17 +357,88 @@ def resample_kernel(polylines: Polylines, spacing: float, starts: NDArray[np.flo
         if not (np.isnan(starts[c, 0]) or np.isnan(starts[c, 1])):
             origin = _closest_arc_position(edges, lo, hi, starts[c])
         gap = perimeter[c] / sizes[c]
-        arcs = arc[lo:hi]
         for k in range(sizes[c]):
-            target = (origin + gap * k) % perimeter[c]
-            # side="right" skips zero-length segments (repeated vertices): a target
-            # sitting exactly on a vertex is taken from the segment that leaves it.
-            segment = lo + min(np.searchsorted(arcs, target, side="right") - 1, hi - lo - 1)
-            edge = length[segment]
-            fraction = (target - arc[segment]) / (edge if edge > 0.0 else 1.0)
-            out[out_bounds[c] + k, 0] = points[segment, 0] + fraction * step[segment, 0]
-            out[out_bounds[c] + k, 1] = points[segment, 1] + fraction * step[segment, 1]
+            _point_at(edges, lo, hi, (origin + gap * k) % perimeter[c], out[out_bounds[c] + k])
     return Polylines(out, out_bounds)
+
+
+@njit
+def follow_kernel(polylines: Polylines, spacing: float, predicted: Polylines) -> Polylines:
+    """Points on each closed polyline where its ``predicted`` points land, not evenly
+    re-spaced (compiled, for the per-frame stage; nothing is checked).
+
+    Every predicted point (last frame's points carried by their contact's motion) is
+    put on the polyline's point nearest it, so the points move as the contact moved
+    and do not slide along its outline. Resampling evenly instead moves point k by k
+    times the change of the perimeter over the point count, and a pixelated outline's
+    perimeter changes every frame. A landing within half a ``spacing`` of the last
+    one kept is dropped; a gap of more than one and a half spacings is filled with
+    evenly spaced points. Where the landings do not run once round the polyline in
+    order (a contact whose shape changed under them), or fewer than three are left,
+    the polyline is resampled evenly from the first landing (as
+    :func:`resample_kernel` from that start).
+
+    Args:
+        polylines: the new outlines, closed, metres.
+        spacing: the contour spacing, metres.
+        predicted: each outline's predicted points, in order round it (counter-
+            clockwise, as the outlines), at least one an outline.
+
+    Returns:
+        The points, one set per polyline, in the order of the landings, the first
+        landing's first.
+    """
+    bounds = polylines.bounds
+    count = len(bounds) - 1
+    edges, perimeter = _edges(polylines)
+    pred_points, pred_bounds = predicted
+    # At most: every landing kept, and each gap filled at the spacing.
+    most = 0
+    for c in range(count):
+        most += (pred_bounds[c + 1] - pred_bounds[c]) + int(perimeter[c] / spacing) + 3
+    out = np.empty((most, 2))
+    out_bounds = np.zeros(count + 1, np.intp)
+    n = 0
+    for c in range(count):
+        lo, hi = bounds[c], bounds[c + 1]
+        p_lo, p_hi = pred_bounds[c], pred_bounds[c + 1]
+        length = perimeter[c]
+        landed = np.empty(p_hi - p_lo)
+        for k in range(p_hi - p_lo):
+            landed[k] = _closest_arc_position(edges, lo, hi, pred_points[p_lo + k])
+        # Once round in order: the forward steps between landings add up to one turn.
+        turn = 0.0
+        for k in range(len(landed)):
+            turn += (landed[(k + 1) % len(landed)] - landed[k]) % length
+        kept = np.empty(len(landed))
+        m = 0
+        if len(landed) >= 3 and turn < 1.5 * length:
+            for k in range(len(landed)):
+                if m == 0 or (landed[k] - kept[m - 1]) % length >= 0.5 * spacing:
+                    kept[m] = landed[k]
+                    m += 1
+            if m > 1 and (kept[0] - kept[m - 1]) % length < 0.5 * spacing:
+                m -= 1
+        if m < 3:
+            size = max(int(np.rint(length / spacing)), 3)
+            gap = length / size
+            origin = landed[0] if len(landed) else 0.0
+            for k in range(size):
+                _point_at(edges, lo, hi, (origin + gap * k) % length, out[n])
+                n += 1
+            out_bounds[c + 1] = n
+            continue
+        for k in range(m):
+            _point_at(edges, lo, hi, kept[k], out[n])
+            n += 1
+            step = (kept[(k + 1) % m] - kept[k]) % length
+            if step > 1.5 * spacing:
+                extra = int(np.rint(step / spacing)) - 1
+                for e in range(1, extra + 1):
+                    _point_at(edges, lo, hi, (kept[k] + step * e / (extra + 1)) % length, out[n])
+                    n += 1
+        out_bounds[c + 1] = n
+    return Polylines(out[:n].copy(), out_bounds)
 
 
 @njit

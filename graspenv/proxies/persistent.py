@@ -12,16 +12,20 @@ real fingertip. One camera frame:
    its points would counter-rotate against a turning object and roll on it.
 3. *Continuing contact.* The previous points are predicted: moved by the contact's
    centroid displacement and, with the estimate on, turned about the centroid by the
-   hand's turn. With ``proxy.predicted_resampling`` the current contour is resampled
-   starting from the predicted first point, so points do not jitter along the
-   contour and pull against each other. The windowed sum-of-squared-distances match
-   (:func:`graspenv.contacts.matching.correspond_batch`: every continuing contact
-   in one call) then gives each current point its predecessor, whose particle it
-   reuses; current points without one get a new particle put down beside the first
-   neighbouring point that is not new, or, farther than :data:`FAR_FROM_ANCHOR`
-   contour spacings (or particle diameters) from that point's particle (the other
-   half of a merged contact), on whatever lies under the point itself, as a new
-   contact's are;
+   hand's turn. With ``proxy.predicted_resampling`` the current contour is made
+   from the predicted points: with ``proxy.follow_points`` (the default) each lands
+   on the new outline where it is nearest (gaps filled at the spacing, crowded points
+   dropped: :func:`graspenv.contacts.resample.follow_kernel`), so the points move as
+   the contact moved and stay put on a still one; without it the outline is
+   resampled evenly from the predicted first point, and the points slide along a
+   round tip's outline as its pixelated perimeter changes. The windowed
+   sum-of-squared-distances match (:func:`graspenv.contacts.matching.correspond_batch`:
+   every continuing contact in one call) then gives each current point its
+   predecessor, whose particle it reuses; current points without one get a new
+   particle put down beside the first neighbouring point that is not new, or,
+   farther than :data:`FAR_FROM_ANCHOR` contour spacings (or particle diameters)
+   from that point's particle (the other half of a merged contact), on whatever
+   lies under the point itself, as a new contact's are;
    previous points whose successor did not name them release theirs.
 4. *New contact.* One particle (stack) per contour point, put down by ray casting on
    whatever is there (table or object top).
@@ -52,7 +56,7 @@ from numpy.typing import NDArray
 
 from graspenv.config import ProxyConfig
 from graspenv.contacts.matching import correspond_batch
-from graspenv.contacts.resample import gather, gather_rows, resample_kernel
+from graspenv.contacts.resample import follow_kernel, gather, gather_rows, resample_kernel
 from graspenv.contacts.tracking import ContactFrame, ContactSet
 from graspenv.geometry import Polylines, bounds_of, reach_from
 from graspenv.jit import njit
@@ -184,7 +188,12 @@ class PersistentProxies:
             return ProxyCommand(np.zeros((0, layers), np.int64), np.zeros((0, 2)), np.zeros(0))
         now = frame.contact_set
         plan = _plan_follow(
-            before, now, proxy.track_hand_rotation, proxy.predicted_resampling, self._spacing
+            before,
+            now,
+            proxy.track_hand_rotation,
+            proxy.predicted_resampling,
+            proxy.follow_points,
+            self._spacing,
         )
         # Every track no contact continues gives its particles back: lift-offs,
         # merges, reused ids.
@@ -438,8 +447,9 @@ class _Plan(NamedTuple):
             (metres, (F, 2)) and the hand's turn (radians).
         previous_rows: the rows of their tracks' last points, (P,).
         predicted: where those points should be now, metres, one set per contact.
-        current: the current contours (resampled from the predicted first points, or
-            the tracker's), metres, one set per contact.
+        current: the current contours (where the predicted points land, resampled
+            from the predicted first points, or the tracker's), metres, one set per
+            contact.
         travel: how far any point of each moved this frame at most, metres, (F,).
     """
 
@@ -461,6 +471,7 @@ def _plan_follow(
     frame: ContactSet,
     track_hand_rotation: bool,
     predicted_resampling: bool,
+    follow_points: bool,
     spacing: float,
 ) -> _Plan:
     """Steps 2 and 3 of the module docstring up to the matching, from the tracks of
@@ -492,9 +503,11 @@ def _plan_follow(
     if track_hand_rotation or predicted_resampling:
         predicted = Polylines(_carry(predicted, motion), previous_bounds)
     if predicted_resampling:
-        outlines, outline_bounds = gather(frame.outlines.points, frame.outlines.bounds, contacts)
-        starts = predicted.points[previous_bounds[:-1]]
-        current = resample_kernel(Polylines(outlines, outline_bounds), spacing, starts)
+        outlines = Polylines(*gather(frame.outlines.points, frame.outlines.bounds, contacts))
+        if follow_points:
+            current = follow_kernel(outlines, spacing, predicted)
+        else:
+            current = resample_kernel(outlines, spacing, predicted.points[previous_bounds[:-1]])
     else:
         contours, contour_bounds = gather(frame.contours.points, frame.contours.bounds, contacts)
         current = Polylines(contours, contour_bounds)

@@ -9,7 +9,8 @@ from hypothesis import strategies as st
 
 from graspenv.bench.contact_scenes import Finger, ellipse_mask_world
 from graspenv.contacts import find_components, orient_ccw, resample_closed, signed_area
-from graspenv.contacts.resample import orient_ccw_batch, resample_closed_batch
+from graspenv.contacts.resample import follow_kernel, orient_ccw_batch, resample_closed_batch
+from graspenv.geometry import Polylines
 from graspenv.surface.geometry import Surface
 
 from .strategies import fingertip_axes, fingertips
@@ -219,3 +220,66 @@ def test_batch_functions_check_bounds_and_starts_before_the_kernels() -> None:
     with pytest.raises(ValueError, match="points must be finite"):
         resample_closed_batch(np.full((8, 2), np.nan), good, 0.25)
     assert resample_closed_batch(points, good, 0.25)[1].tolist() == [0, 16, 32]
+
+
+# -- points that land where they were predicted (follow_kernel) ---------------------
+
+
+def _circle(radius: float, sides: int, phase: float = 0.0) -> np.ndarray:
+    angle = phase + np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
+    return radius * np.column_stack([np.cos(angle), np.sin(angle)])
+
+
+def _follow(outline: np.ndarray, spacing: float, predicted: np.ndarray) -> np.ndarray:
+    polylines = Polylines(outline, np.array([0, len(outline)]))
+    points, bounds = follow_kernel(
+        polylines, spacing, Polylines(predicted, np.array([0, len(predicted)]))
+    )
+    assert list(bounds) == [0, len(points)]
+    return points
+
+
+def _angles(points: np.ndarray) -> np.ndarray:
+    return np.degrees(np.arctan2(points[:, 1], points[:, 0]))
+
+
+def test_followed_points_stay_where_predicted_when_the_perimeter_changes() -> None:
+    # An 8 mm fingertip's outline, then the same tip with a 0.4 mm bulge on one
+    # side (as a pixelated outline changes from frame to frame), drawn with other
+    # vertices. Evenly resampled from the same first point, every point shifts by
+    # its share of the bulge's extra length (up to 0.7°); followed, only the points
+    # on the bulge move (0.23°, put on its nearest point), the others stay put.
+    before = resample_closed(_circle(0.008, 64), 0.004)
+    angle = 0.01 + np.linspace(0.0, 2.0 * np.pi, 60, endpoint=False)
+    radius = 0.008 + 0.0004 * np.exp(-(((angle - np.pi) / 0.3) ** 2))
+    after = radius[:, None] * np.column_stack([np.cos(angle), np.sin(angle)])
+    followed = _follow(after, 0.004, before)
+    evenly = resample_closed(after, 0.004, start=before[0])
+    assert len(followed) == len(before) == 13
+    off_followed = np.abs((_angles(followed) - _angles(before) + 180) % 360 - 180)
+    off_evenly = np.abs((_angles(evenly) - _angles(before) + 180) % 360 - 180)
+    assert off_followed.max() < 0.3 and np.median(off_followed) < 0.01
+    assert np.median(off_evenly) > 0.4
+
+
+def test_a_gap_is_filled_and_crowded_points_are_dropped() -> None:
+    outline = _circle(0.008, 64)
+    points = resample_closed(outline, 0.004)
+    # One point missing: the gap of two spacings gets one point in its middle.
+    gapped = _follow(outline, 0.004, np.delete(points, 5, axis=0))
+    assert len(gapped) == len(points)
+    np.testing.assert_allclose(gapped[5], points[5], atol=1e-4)
+    # A point 0.5 mm after another (an eighth of the spacing) is dropped.
+    crowded = np.insert(points, 3, points[2] + np.array([0.0, 0.0005]), axis=0)
+    kept = _follow(outline, 0.004, crowded)
+    assert len(kept) == len(points)
+    np.testing.assert_allclose(kept, points, atol=1e-4)
+
+
+def test_landings_out_of_order_fall_back_to_even_resampling() -> None:
+    outline = _circle(0.008, 64)
+    points = resample_closed(outline, 0.004)
+    shuffled = points[[0, 2, 1, *range(3, len(points))]]
+    np.testing.assert_allclose(
+        _follow(outline, 0.004, shuffled), resample_closed(outline, 0.004, start=points[0])
+    )

@@ -429,20 +429,6 @@ def random_fingers(paths: Sequence[FingerPath], frames: int, obj: ObjectConfig) 
     return played("random fingers", config, hands, extra_frames=3)
 
 
-def stiff_pinch(mass: float = 0.05, depth: float = 0.006, substeps: int = 32) -> Case:
-    """A light box squeezed ``depth`` and turned under a very stiff control law
-    (Δt = 1/4000 s run at ``substeps`` fixed sub-steps, so Δt is the sub-step) by
-    20 g particles (their mass not scaled to the box's, ``proxy.mass_ratio`` off):
-    m·d/Δt² is about 440 N a particle at the defaults."""
-    obj = box(mass=mass)
-    config = scene(
-        obj,
-        physics={"substeps": substeps, "max_substeps": substeps, "control_time": 1.0 / 4000.0},
-        proxy={"mass_ratio": 0.0},
-    )
-    return pinch(obj, config, "stiff pinch", depth=depth)
-
-
 #: Three fingers found by a random search over the property test's motions, before
 #: its domain was narrowed: the thin one (0.77 m/s) shoves the box into a wide one
 #: that drifts the other way at 0.14 m/s.

@@ -276,9 +276,9 @@ class ProxyConfig:
             contacts' centroids and apply it to previous points before matching.
         predicted_resampling: resample a continuing contour starting from the
             predicted previous points, so points do not jitter along the contour.
-        follow_points: with ``predicted_resampling``, put each predicted point where
-            it lands on the new outline (the outline's nearest point), filling gaps
-            and dropping crowded points, instead of resampling evenly from the first
+        follow_points: with ``predicted_resampling``, move each predicted point
+            onto the new outline along the contour's normal (filling gaps and
+            dropping crowded points) instead of resampling evenly from the first
             one. Evenly spaced points slide along a round fingertip's outline as its
             pixelated perimeter changes from frame to frame (about 0.15 mm a frame
             on an 8 mm tip), drift by degrees over a turn, and shear the object

@@ -10,6 +10,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 _CALL = """
 import json, numpy as np
 from graspenv.geometry import footprint_depths
@@ -72,3 +74,23 @@ def test_compiled_kernels_need_no_scipy() -> None:
                 and inner.value.id == "np"
             ):
                 assert inner.attr not in _NEEDS_SCIPY, f"{where} uses np.{inner.attr}"
+
+
+def test_the_cache_folder_changes_with_any_source(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # numba checks only a cached function's own file; machine code compiled into a
+    # caller keeps the callees it was compiled with. The folder is named by every
+    # source, so a change anywhere starts a fresh cache.
+    from graspenv.jit import cache_folder, sources_key
+
+    package = tmp_path / "package"
+    (package / "sub").mkdir(parents=True)
+    (package / "a.py").write_text("x = 1\n")
+    (package / "sub" / "b.py").write_text("y = 2\n")
+    before = sources_key(package)
+    assert sources_key(package) == before
+    (package / "sub" / "b.py").write_text("y = 3\n")
+    assert sources_key(package) != before
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
+    assert cache_folder(package) == tmp_path / "cache" / f"graspenv-{sources_key(package)}"

@@ -367,16 +367,18 @@ def follow_kernel(polylines: Polylines, spacing: float, predicted: Polylines) ->
     """Points on each closed polyline where its ``predicted`` points land, not evenly
     re-spaced (compiled, for the per-frame stage; nothing is checked).
 
-    Every predicted point (last frame's points carried by their contact's motion) is
-    put on the polyline's point nearest it, so the points move as the contact moved
-    and do not slide along its outline. Resampling evenly instead moves point k by k
-    times the change of the perimeter over the point count, and a pixelated outline's
-    perimeter changes every frame. A landing within half a ``spacing`` of the last
-    one kept is dropped; a gap of more than one and a half spacings is filled with
-    evenly spaced points. Where the landings do not run once round the polyline in
-    order (a contact whose shape changed under them), or fewer than three are left,
-    the polyline is resampled evenly from the first landing (as
-    :func:`resample_kernel` from that start).
+    Every predicted point (last frame's points carried by their contact's motion)
+    moves onto the polyline along the predicted contour's normal there (the nearest
+    crossing within a ``spacing``; where there is none, the polyline's nearest
+    point), so the points move as the contact moved and do not slide along its
+    outline: an uneven outline moves them in and out, not along. Resampling evenly
+    instead moves point k by k times the change of the perimeter over the point
+    count, and a pixelated outline's perimeter changes every frame. A landing within
+    half a ``spacing`` of the last one kept is dropped; a gap of more than one and a
+    half spacings is filled with evenly spaced points. Where the landings do not run
+    once round the polyline in order (a contact whose shape changed under them), or
+    fewer than three are left, the polyline is resampled evenly from the first
+    landing (as :func:`resample_kernel` from that start).
 
     Args:
         polylines: the new outlines, closed, metres.
@@ -403,9 +405,20 @@ def follow_kernel(polylines: Polylines, spacing: float, predicted: Polylines) ->
         lo, hi = bounds[c], bounds[c + 1]
         p_lo, p_hi = pred_bounds[c], pred_bounds[c + 1]
         length = perimeter[c]
-        landed = np.empty(p_hi - p_lo)
-        for k in range(p_hi - p_lo):
-            landed[k] = _closest_arc_position(edges, lo, hi, pred_points[p_lo + k])
+        count_k = p_hi - p_lo
+        landed = np.empty(count_k)
+        for k in range(count_k):
+            point = pred_points[p_lo + k]
+            # Along the predicted contour's normal at the point (the chord of its two
+            # neighbours turned a right angle), so that an uneven outline moves the
+            # point in and out, not along; the nearest point where that line misses.
+            after = pred_points[p_lo + (k + 1) % count_k]
+            before = pred_points[p_lo + (k - 1) % count_k]
+            landed[k] = _normal_arc_position(
+                edges, lo, hi, point, after[1] - before[1], before[0] - after[0], spacing
+            )
+            if np.isnan(landed[k]):
+                landed[k] = _closest_arc_position(edges, lo, hi, point)
         # Once round in order: the forward steps between landings add up to one turn.
         turn = 0.0
         for k in range(len(landed)):
@@ -439,6 +452,42 @@ def follow_kernel(polylines: Polylines, spacing: float, predicted: Polylines) ->
                     n += 1
         out_bounds[c + 1] = n
     return Polylines(out[:n].copy(), out_bounds)
+
+
+@njit
+def _normal_arc_position(
+    edges: _Edges,
+    lo: int,
+    hi: int,
+    point: NDArray[np.float64],
+    nx: float,
+    ny: float,
+    reach: float,
+) -> float:
+    """Arc position along the polyline of edges ``lo:hi`` where the line through
+    ``point`` along (``nx``, ``ny``) meets it nearest ``point``, within ``reach``;
+    NaN where it meets none."""
+    points, step, length, arc = edges
+    norm = np.hypot(nx, ny)
+    if not norm > 0.0:
+        return np.nan
+    nx, ny = nx / norm, ny / norm
+    best = np.nan
+    best_s = reach
+    for i in range(lo, hi):
+        dx, dy = step[i, 0], step[i, 1]
+        denominator = dx * ny - dy * nx
+        if abs(denominator) < 1e-12 * (length[i] + 1e-30):
+            continue
+        wx, wy = point[0] - points[i, 0], point[1] - points[i, 1]
+        u = (wx * ny - wy * nx) / denominator
+        if u < 0.0 or u > 1.0:
+            continue
+        along = (wx * dy - wy * dx) / denominator
+        if abs(along) <= best_s:
+            best_s = abs(along)
+            best = arc[i] + u * length[i]
+    return best
 
 
 @njit

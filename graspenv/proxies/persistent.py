@@ -13,9 +13,9 @@ real fingertip. One camera frame:
 3. *Continuing contact.* The previous points are predicted: moved by the contact's
    centroid displacement and, with the estimate on, turned about the centroid by the
    hand's turn. With ``proxy.predicted_resampling`` the current contour is made
-   from the predicted points: with ``proxy.follow_points`` (the default) each lands
-   on the new outline where it is nearest (gaps filled at the spacing, crowded points
-   dropped: :func:`graspenv.contacts.resample.follow_kernel`), so the points move as
+   from the predicted points: with ``proxy.follow_points`` (the default) each moves
+   onto the new outline along the contour's normal (gaps filled at the spacing,
+   crowded points dropped: :func:`graspenv.contacts.resample.follow_kernel`), so the points move as
    the contact moved and stay put on a still one; without it the outline is
    resampled evenly from the predicted first point, and the points slide along a
    round tip's outline as its pixelated perimeter changes. The windowed

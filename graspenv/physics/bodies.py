@@ -13,9 +13,10 @@ Settings applied (from ``scene.physics``), and why:
   solver order, and with it every bit of the result, depends only on the commands.
 - ``numSolverIterations`` from ``physics.solver_iterations``; ``allowedCcdPenetration``
   from ``physics.allowed_ccd_penetration`` (at Bullet's default a fast 4 mm sphere
-  tunnels through a thin wall even with CCD); ``contactBreakingThreshold`` from
-  ``physics.contact_breaking_threshold`` (the 0.02 m default inflates every bounding
-  box and slows ray casts five-fold).
+  tunnels through a thin wall even with CCD); ``contactBreakingThreshold`` such
+  that a particle's contacts form ``physics.contact_breaking_threshold`` before it
+  touches (:func:`bullet_breaking_threshold`: Bullet scales the threshold by the
+  smaller shape's size).
 - Linear and angular damping are zero for every body: air drag is negligible here
   and damping would bias slide distances.
 - An upright cylinder stands on a thin square foot inscribed in its base
@@ -44,6 +45,7 @@ __all__ = [
     "TABLE_THICKNESS",
     "SceneBodies",
     "build_scene",
+    "bullet_breaking_threshold",
     "cylinder_collision_shape",
     "initial_pose",
     "place_objects",
@@ -95,6 +97,24 @@ class SceneBodies:
     bounding_radii: NDArray[np.float64]
 
 
+def bullet_breaking_threshold(distance: float, particle_radius: float) -> float:
+    """The ``contactBreakingThreshold`` to give PyBullet for a particle's contacts to
+    form ``distance`` metres before it touches.
+
+    PyBullet's dispatcher scales the threshold by the smaller shape of each pair: a
+    pair's contacts form within the threshold times that shape's bounding-sphere
+    radius, which Bullet takes from the shape's box (√3·r for a sphere of radius r).
+    Given 1 mm as it is, a 2 mm particle's contacts formed only 3.5 µm before it
+    touched, so a particle closing faster than that in a sub-step met no contact
+    and ended up to a sub-step's travel inside what it struck (the long fuzz's last
+    violations; docs/design.md, section 3b). The larger shape of a pair gets its own
+    multiple (an object on the table: about 6 mm per 2 cm of its size); every
+    bounding box grows by the threshold itself, in metres, in Bullet's broadphase.
+    ``tests/physics/test_physics_world.py`` measures where a particle's contacts form.
+    """
+    return distance / (math.sqrt(3.0) * particle_radius)
+
+
 def build_scene(client: int, scene: SceneConfig, substep_dt: float) -> SceneBodies:
     """Set Bullet's parameters and build the table, the floor and every object.
 
@@ -111,7 +131,9 @@ def build_scene(client: int, scene: SceneConfig, substep_dt: float) -> SceneBodi
         numSolverIterations=physics.solver_iterations,
         deterministicOverlappingPairs=1,
         allowedCcdPenetration=physics.allowed_ccd_penetration,
-        contactBreakingThreshold=physics.contact_breaking_threshold,
+        contactBreakingThreshold=bullet_breaking_threshold(
+            physics.contact_breaking_threshold, scene.proxy.particle_radius
+        ),
         contactERP=physics.contact_erp,
         physicsClientId=client,
     )

@@ -70,9 +70,46 @@ def test_the_seeded_sample_keeps_its_record() -> None:
 #: from its anchor is put down where it is: a 19.1 g cylinder of friction 1.56 with
 #: two fingertips on its top whose contacts merge (6571), dragged to 1.06 times the
 #: speed bound by particles that raced along the merged contour (0.24 times now).
-HELD = (509, 911, 1969, 2371, 2701, 2934, 4125, 4876, 5965, 6416, 6571, 8716, 8861, 9984)
+#: Held since a particle's contacts form 1 mm before it touches
+#: (``physics.contact_breaking_threshold``; 3.5 µm before): particles that closed on
+#: a box faster than that in a sub-step and ended 1.03-1.23 mm inside it, on the top
+#: of a 5.9 g box (1580), at the foot of a tall 20.5 g box tipping in a two-finger
+#: squeeze (2054) and of a 103 g box under six fingers (3474).
+HELD = (
+    509,
+    911,
+    1580,
+    1969,
+    2054,
+    2371,
+    2701,
+    2934,
+    3474,
+    4125,
+    4876,
+    5965,
+    6416,
+    6571,
+    8716,
+    8861,
+    9984,
+)
 
 
 @pytest.mark.parametrize("seed", HELD, ids=str)
 def test_the_named_fuzz_cases_keep_their_record(seed: int) -> None:
     assert fuzz.play(seed).broken == []
+
+
+#: Episodes of the long run that break an invariant today, with their record: not a
+#: target, so that a fix fails here too (then move the seed to HELD and update the
+#: README). 9743: a 53.6 g box on a table of friction 1.81, pushed at its foot by a
+#: particle under five fingers, rattles in stick-slip (its spin changes sign every
+#: sub-step, about 10 rad/s) and lets the particle 1.033 mm into it in frame 13
+#: (1 mm allowed).
+OPEN: dict[int, list[str]] = {9743: ["inside_object"]}
+
+
+@pytest.mark.parametrize("seed", sorted(OPEN), ids=str)
+def test_the_open_fuzz_cases_keep_their_record(seed: int) -> None:
+    assert fuzz.play(seed).broken == OPEN[seed]

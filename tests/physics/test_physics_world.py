@@ -431,3 +431,31 @@ def test_the_invariants_measure_a_particle_against_the_shape_bullet_has(
             assert -measured[0] == pytest.approx(bullet, abs=5e-5), (name, surface, gap)
         sharp = object_penetration(config, position, quaternion, centre[None], r)[0]
         assert sharp >= measured[0]
+
+
+@pytest.mark.parametrize("distance", [0.001, 0.0003])
+def test_a_particles_contacts_form_at_the_configured_distance(
+    make_world: Callable[..., PhysicsWorld], distance: float
+) -> None:
+    """``physics.contact_breaking_threshold`` is where a particle's contacts with an
+    object and the table form, in metres, though Bullet scales its own threshold by
+    the smaller shape's size (given 1 mm as it was, a particle's formed 3.5 µm off)."""
+    world = make_world(physics={"contact_breaking_threshold": distance})
+    r = world.pool.radius
+    particle = world.pool.acquire(1)
+    body = int(world.pool.body_ids(particle)[0])
+    box = world._object_bodies[world.object_index("box")]
+    face = world.scene.objects[0].size[0] / 2
+    for gap, formed in ((0.9 * distance, True), (1.1 * distance, False)):
+        # Off the box's +x face, and over the table (clear of the box).
+        for centre, other in (([face + r + gap, 0.0, 0.015], box), ([0.2, 0.0, r + gap], None)):
+            pb.resetBasePositionAndOrientation(
+                body, centre, [0, 0, 0, 1], physicsClientId=world.client
+            )
+            pb.performCollisionDetection(physicsClientId=world.client)
+            points = pb.getContactPoints(body, physicsClientId=world.client)
+            if other is not None:
+                points = [p for p in points if p[2] == other]
+            assert bool(points) == formed, (centre, gap)
+            if formed:
+                assert points[0][8] == pytest.approx(gap, abs=1e-6)

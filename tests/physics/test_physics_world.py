@@ -363,12 +363,22 @@ def test_a_spinning_box_stays_on_the_table_at_one_step_a_frame(
     make_world: Callable[..., PhysicsWorld], spin: float
 ) -> None:
     """Bullet tips a box spinning on a slippery table onto a corner and sinks it when
-    a step is a whole 1/60 s frame (2.3 mm at 4 rad/s, 6.7 mm at 16, no particle
-    near); the frames whose corners move more than ``physics.substep_travel`` get
-    more steps, and it stays on the table (0.2 mm at most)."""
+    a step is a whole 1/60 s frame and its contacts form only at the touch (4.9 mm
+    at 4 and at 16 rad/s, no particle near; they did until
+    ``physics.contact_breaking_threshold`` became a distance, and do at 0.1 mm):
+    the frames whose corners move more than ``physics.substep_travel`` get more
+    steps, and it stays on the table (0.2 mm at most). At the default 1 mm the
+    box's contacts with the table form about 13 mm off, and it stays up even at
+    one step a frame (0.01 mm)."""
 
-    def deepest(max_substeps: int) -> tuple[float, int]:
-        physics = {"substeps": 1, "max_substeps": max_substeps, "table_friction": 0.1}
+    def deepest(max_substeps: int, distance: float | None = None) -> tuple[float, int]:
+        physics: dict[str, float] = {
+            "substeps": 1,
+            "max_substeps": max_substeps,
+            "table_friction": 0.1,
+        }
+        if distance is not None:
+            physics["contact_breaking_threshold"] = distance
         world = make_world(physics=physics)
         world.set_object_state("box", angular_velocity=[0.0, 0.0, spin])
         lowest, steps = math.inf, 0
@@ -378,12 +388,14 @@ def test_a_spinning_box_stays_on_the_table_at_one_step_a_frame(
             steps += world.last_substeps
         return BOX_HEIGHT / 2 - lowest, steps
 
-    fixed, fixed_steps = deepest(1)
-    adaptive, steps = deepest(16)
+    # Contacts at the touch: 2 µm, about what Bullet made of the old 1 mm.
+    fixed, fixed_steps = deepest(1, 2e-6)
+    adaptive, steps = deepest(16, 2e-6)
     assert fixed > 0.002
     assert fixed_steps == 120
     assert adaptive < 3e-4
     assert 120 < steps < 120 * 16 / 2  # only the fast frames get more
+    assert deepest(1)[0] < 1e-4
 
 
 def test_the_invariants_measure_a_particle_against_the_shape_bullet_has(

@@ -27,7 +27,14 @@ def test_1_side_strike_pushes_box_along_the_finger() -> None:
 def test_2_rub_moves_a_light_object_and_slides_over_a_heavy_one() -> None:
     light = scenarios.top_rub_light(PERSISTENT)
     assert light["along_mm"] > 10.0
-    assert abs(light["turn_deg"]) > 0.5  # an off-centre rub turns it too
+    # Carried, not turned. The rub is 15 mm off the 20 g card's centre: its ring of
+    # about 12 particles presses 0.6 N (proxy.down_force 0.05 N each), so the table
+    # (friction 0.5) drags back 0.41 N at the centre of its pressure, 11 mm towards
+    # the finger, a torque of 1.5 mN·m; the ring's twist friction (combined friction
+    # 1.0 at its 8 mm radius) holds up to 5 mN·m. This asked for a turn of more than
+    # 0.5° until a particle's contacts formed before it touched (2.2° then; 0.33°
+    # since, README, "Stability on hard cases").
+    assert abs(light["turn_deg"]) < 1.0
     heavy = scenarios.top_rub_heavy(PERSISTENT)
     assert heavy["moved_mm"] < 2.0
 

@@ -107,9 +107,10 @@ def bullet_breaking_threshold(distance: float, particle_radius: float) -> float:
     Given 1 mm as it is, a 2 mm particle's contacts formed only 3.5 µm before it
     touched, so a particle closing faster than that in a sub-step met no contact
     and ended up to a sub-step's travel inside what it struck (the long fuzz's last
-    violations; docs/design.md, section 3b). The larger shape of a pair gets its own
-    multiple (an object on the table: about 6 mm per 2 cm of its size); every
-    bounding box grows by the threshold itself, in metres, in Bullet's broadphase.
+    violations; docs/design.md, section 3b). The same threshold scales a pair of
+    larger shapes by the smaller's bounding radius (an object on the table: about
+    13 mm for the default box at 1 mm), and Bullet's broadphase grows every
+    bounding box by the threshold itself, in metres.
     ``tests/physics/test_physics_world.py`` measures where a particle's contacts form.
     """
     return distance / (math.sqrt(3.0) * particle_radius)

@@ -222,19 +222,24 @@ class ProxyConfig:
     Attributes:
         method: ``persistent`` (Wilson ITS 2009), ``instant`` (UIST 2008) or ``rigid``.
         particle_radius: sphere radius, metres.
-        particle_mass: kilograms per sphere. With ``physics.control_time`` it sets the
-            grip stiffness m/Δt² (1152 N/m per particle at the defaults): stiff enough
-            that a firm squeeze holds a box against a third finger's push (under
-            2 mm), soft enough that the force clamp is reached only past 4 mm.
-        mass_ratio: the most a particle may weigh as a share of the scene's lightest
-            object (0 turns it off). Lighter particles get their force clamp
-            (``physics.max_particle_force``) and their press on the table
-            (``down_force``) scaled by the same factor, so a light object is gripped
-            as a heavy one is, with the same margin over its weight: 20 g particles
-            squeezing a 5 g box outweigh it fourfold, and it jumps out of the grip
-            (docs/design.md, section 3b). The press on an object's top is not scaled
-            (it is the finger's, and rubs a light object along).
-            :attr:`SceneConfig.particle_settings` resolves it.
+        particle_mass: kilograms per sphere in a scene whose lightest object weighs
+            200 g (or in any scene with ``mass_ratio`` 0), the mass at which
+            ``physics.max_particle_force`` and ``down_force`` are given. With
+            ``physics.control_time`` it sets the grip stiffness m/Δt² (1152 N/m per
+            particle at the defaults): stiff enough that a firm squeeze holds a box
+            against a third finger's push (under 2 mm), soft enough that the force
+            clamp is reached only past 4 mm.
+        mass_ratio: what a particle weighs as a share of the scene's lightest object
+            (0 turns it off and every particle weighs ``particle_mass``). The
+            particles' force clamp (``physics.max_particle_force``) and press on the
+            table (``down_force``) scale with their mass, so every object is gripped
+            with the same margin over its weight: scaling every mass and force of a
+            grasp by one factor leaves its motion as it was. Without it, 20 g
+            particles squeezing a 5 g box outweigh it fourfold and it jumps out of
+            the grip, and a 2 kg box lags a turn by 2.25° (docs/design.md, section
+            3b). The press on an object's top is not scaled (it is the finger's, and
+            rubs a light object along). :attr:`SceneConfig.particle_settings`
+            resolves it.
         particle_friction: lateral friction of a particle. Bullet multiplies it by the
             object's: the default 2.0 gives a finger–object coefficient of 1.0 on a 0.5
             object, which a firm squeeze needs to resist a third finger's push; a
@@ -482,15 +487,13 @@ class SceneConfig:
     @property
     def particle_scale(self) -> float:
         """The factor ``proxy.mass_ratio`` puts on the particles' mass, table press and
-        force clamp in this scene: 1 unless the lightest object weighs less than
-        ``particle_mass / mass_ratio``."""
+        force clamp in this scene: 1 when the lightest object weighs
+        ``particle_mass / mass_ratio`` (200 g at the defaults), below 1 for lighter
+        scenes and above it for heavier ones."""
         ratio = self.proxy.mass_ratio
         if ratio == 0 or not self.objects:
             return 1.0
-        # Only lighter: heavier, stiffer particles would hold a 2 kg box's turn to
-        # 1.3° instead of 4.8°, but push past 1 mm into objects in 75 of 1000 fuzz
-        # episodes instead of 54 (docs/design.md, section 3b).
-        scale = min(1.0, ratio * min(o.mass for o in self.objects) / self.proxy.particle_mass)
+        scale = ratio * min(o.mass for o in self.objects) / self.proxy.particle_mass
         # Rounding (0.1 · 0.2 kg is not 0.02 kg in binary) must not perturb a scene
         # whose particles already weigh the ratio's share.
         return 1.0 if math.isclose(scale, 1.0, rel_tol=1e-9) else scale

@@ -158,7 +158,10 @@ def test_particles_weigh_a_share_of_the_lightest_object() -> None:
     assert proxy.particle_mass == pytest.approx(0.0005)
     assert proxy.down_force == pytest.approx(0.05 * 0.025)
     assert physics.max_particle_force == pytest.approx(PhysicsConfig().max_particle_force * 0.025)
-    assert scene(2.0).particle_scale == 1.0  # never heavier than particle_mass
+    assert scene(2.0).particle_scale == pytest.approx(10.0)  # heavier objects too
+    proxy, physics = scene(2.0).particle_settings
+    assert proxy.particle_mass == pytest.approx(0.2)
+    assert physics.max_particle_force == pytest.approx(PhysicsConfig().max_particle_force * 10)
     assert scene(2.0, 0.05).particle_scale == pytest.approx(0.25)  # the lightest
     assert scene(0.005, mass_ratio=0.0).particle_scale == 1.0
     with pytest.raises(ConfigError, match="mass_ratio"):

@@ -569,10 +569,10 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 #: over three sub-pixel placements (``graspenv bench``, README "Speed against
 #: error"), with the sub-steps that follow the motion (``physics.substep_travel``);
 #: the worst scenario is the flick for ``fast`` and the two-hand carry for
-#: ``default`` (measured 2026-12-04 with reduced-coordinate objects and 150 solver
-#: iterations at the default, 300 at ``reference``; ``fast`` keeps maximal-coordinate
-#: ones and 50 iterations).
-PRESET_DRIFT_MM: dict[str, float] = {"fast": 19.93, "default": 0.15, "reference": 0.0}
+#: ``default`` (measured 2026-12-05, ``graspenv bench --replays 1``, with
+#: reduced-coordinate objects and 150 solver iterations at the default, 300 at
+#: ``reference``; ``fast`` keeps maximal-coordinate ones and 50 iterations).
+PRESET_DRIFT_MM: dict[str, float] = {"fast": 17.75, "default": 0.09, "reference": 0.0}
 
 
 def choose_fidelity(error_budget_mm: float) -> str:

@@ -162,10 +162,14 @@ def test_particles_weigh_a_share_of_the_lightest_object() -> None:
     proxy, physics = scene(2.0).particle_settings
     assert proxy.particle_mass == pytest.approx(0.2)
     assert physics.max_particle_force == pytest.approx(PhysicsConfig().max_particle_force * 10)
+    assert proxy.down_force == pytest.approx(0.05 * 10)
     assert scene(2.0, 0.05).particle_scale == pytest.approx(0.25)  # the lightest
+    assert scene(2.0, 5.0).particle_scale == pytest.approx(10.0)  # both heavy
     assert scene(0.005, mass_ratio=0.0).particle_scale == 1.0
     with pytest.raises(ConfigError, match="mass_ratio"):
         load_config(None, proxy={"mass_ratio": -0.1})
+    with pytest.raises(ConfigError, match="mass_ratio"):
+        load_config(None, proxy={"mass_ratio": float("inf")})
 
 
 @pytest.mark.parametrize("key", ["close_px", "fill_px"])

@@ -293,10 +293,15 @@ def test_make_simulation_takes_the_environments_presets() -> None:
         assert (physics.reduced_objects, physics.contact_erp) == (False, 0.08)
         assert physics.max_particle_force == 5.0
         assert physics.solver_iterations == 50
+        assert physics.max_substeps == 16  # the cap its speed was measured with
     assert load_config(None).physics.reduced_objects
     with graspenv.make_simulation(fidelity="reference", physics={"substeps": 3}) as sim:
         assert sim.config.physics.substeps == 3
         assert sim.config.physics.solver_iterations == 300
+    # A scene file's coarser sub-stepping does not carry into its reference.
+    coarse = {"physics": {"max_substeps": 8, "substep_travel": 0.002}}
+    with graspenv.make_simulation(coarse, fidelity="reference") as sim:
+        assert (sim.config.physics.max_substeps, sim.config.physics.substep_travel) == (32, 3e-4)
     with graspenv.make_simulation() as sim:
         assert sim.config == load_config(None)
     # auto picks the cheapest preset within the budget (PRESET_DRIFT_MM).

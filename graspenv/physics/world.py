@@ -135,7 +135,7 @@ class PhysicsWorld(Closeable):
         self._bodies = build_scene(self.client, scene, self.substep_dt)
         self._object_bodies = self._bodies.objects
         self._rays = RayCaster(self.client, self._bodies, scene.proxy.particle_radius)
-        # The particles' mass, press and force clamp, scaled for a light object.
+        # The particles' mass, press and force clamp, scaled to the lightest object.
         self._particle_proxy, self._particle_physics = scene.particle_settings
         self.pool = ParticlePool(self.client, self._particle_proxy, self._particle_physics)
         self.rigid_proxies = RigidBodies(self.client, self._particle_proxy, self._particle_physics)

@@ -49,6 +49,16 @@ def test_an_episode_replays_the_same_from_its_seed() -> None:
     assert fuzz.episode(7) == fuzz.episode(7)
     first, again = fuzz.play(14), fuzz.play(14)
     assert (first.broken, first.first) == (again.broken, again.first)
+    assert first.deepest_mm == again.deepest_mm
+
+
+def test_the_report_gives_the_overlap_tail() -> None:
+    outcomes = [fuzz.Outcome(seed, "", deepest_mm=0.001 * seed) for seed in range(1, 1001)]
+    outcomes.append(fuzz.Outcome(0, "", deepest_mm=-math.inf))  # never touched
+    tail = fuzz.FuzzReport(outcomes, 1.0).overlap_tail()
+    assert "over 1000 touching episodes" in tail
+    assert "median 0.500 mm" in tail and "max 1.000" in tail
+    assert "500 past half of it" in tail
 
 
 def test_the_seeded_sample_keeps_its_record() -> None:

@@ -364,8 +364,8 @@ class PhysicsConfig:
             below) every frame gets exactly ``substeps``. At 16 one of 10 000 fuzz
             episodes broke (a light box rattling in stick-slip on a table of friction
             1.8 let a particle 1.03 mm into it in a frame at the cap); at 32 none
-            did, before the particles of heavy objects were made heavier (since, one
-            does, seed 4192, in a frame of 7 sub-steps: not the cap). Slow frames
+            did, before the particles of heavy objects were made heavier (since then one
+            does: seed 4192, in a frame of 7 sub-steps, not at the cap). Slow frames
             never reach it; ``fast`` keeps 16.
         substep_travel: the farthest an object's point or a particle may move in one
             physics step, metres: a frame whose fastest point would move further

@@ -206,7 +206,8 @@ class Outcome:
 
     Attributes:
         deepest_mm: the deepest any particle overlapped an object in the episode,
-            millimetres (negative: never touched one); the allowance is
+            millimetres (negative: none overlapped one; -inf: no particle ever had
+            an object to overlap; an empty cell in ``fuzz.csv``); the allowance is
             ``Tolerances.inside_object``.
     """
 
@@ -275,7 +276,8 @@ class FuzzReport:
     def overlap_tail(self) -> str:
         """How near the episodes came to the overlap allowance: the deepest particle
         overlap's median, 99th and 99.9th percentiles and maximum over the episodes
-        in which a particle touched an object."""
+        in which a particle touched an object (with fewer than 1 000 of them the
+        99.9th percentile is little more than the maximum)."""
         depths = np.array([o.deepest_mm for o in self.outcomes if o.deepest_mm > 0.0])
         if not len(depths):
             return "deepest particle overlap: no particle touched an object"
@@ -303,7 +305,7 @@ class FuzzReport:
                         o.first,
                         o.description,
                         f"{o.seconds:.3f}",
-                        f"{o.deepest_mm:.4f}",
+                        f"{o.deepest_mm:.4f}" if math.isfinite(o.deepest_mm) else "",
                     ]
                 )
         return path

@@ -10,6 +10,7 @@ README's ("Stability on hard cases").
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -47,18 +48,27 @@ def test_episodes_cover_the_hard_space() -> None:
 
 def test_an_episode_replays_the_same_from_its_seed() -> None:
     assert fuzz.episode(7) == fuzz.episode(7)
-    first, again = fuzz.play(14), fuzz.play(14)
+    first, again = fuzz.play(13), fuzz.play(13)  # its particles meet the object
     assert (first.broken, first.first) == (again.broken, again.first)
-    assert first.deepest_mm == again.deepest_mm
+    assert math.isfinite(first.deepest_mm) and first.deepest_mm == again.deepest_mm
 
 
-def test_the_report_gives_the_overlap_tail() -> None:
-    outcomes = [fuzz.Outcome(seed, "", deepest_mm=0.001 * seed) for seed in range(1, 1001)]
-    outcomes.append(fuzz.Outcome(0, "", deepest_mm=-math.inf))  # never touched
-    tail = fuzz.FuzzReport(outcomes, 1.0).overlap_tail()
+def test_the_report_gives_the_overlap_tail(tmp_path: Path) -> None:
+    # Overlaps of 0.0023, 0.0033, ... 1.0013 mm (no figure on a rounding tie), one
+    # episode whose particles met an object without overlapping it and one in which
+    # no particle had an object to overlap.
+    outcomes = [fuzz.Outcome(k, "", deepest_mm=0.001 * k + 0.0003) for k in range(1, 1002)]
+    outcomes[0].deepest_mm = 0.0
+    outcomes.append(fuzz.Outcome(0, "", deepest_mm=-math.inf))
+    report = fuzz.FuzzReport(outcomes, 1.0)
+    tail = report.overlap_tail()
     assert "over 1000 touching episodes" in tail
-    assert "median 0.500 mm" in tail and "max 1.000" in tail
-    assert "500 past half of it" in tail
+    assert "median 0.502 mm, 99th percentile 0.991, 99.9th 1.000, max 1.001" in tail
+    assert "502 past half of it" in tail
+    lines = report.write(tmp_path / "fuzz.csv").read_text().splitlines()
+    assert lines[0].endswith(",deepest_mm") and lines[3].endswith(",0.0033")
+    assert lines[-1].endswith(",")  # the episode with nothing to overlap: an empty cell
+    assert "no particle touched" in fuzz.FuzzReport(outcomes[-1:], 1.0).overlap_tail()
 
 
 def test_the_seeded_sample_keeps_its_record() -> None:

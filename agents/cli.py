@@ -154,7 +154,12 @@ def add_eval(sub: argparse._SubParsersAction) -> None:
         help="measure an agent over seeded episodes (success with 95 %% CI, stability; CSV/JSON)",
     )
     p.add_argument("--env", default=None, help="environment id (default: the agent's own)")
-    p.add_argument("--agent", required=True, help="scripted:NAME, random, or a model/run folder")
+    p.add_argument(
+        "--agent",
+        required=True,
+        help="scripted:NAME, random, still, a model, or a run folder "
+        "(graspenv train's or a plain zoo run's)",
+    )
     _add_episodes(p, None, "first episode seed (default 1000)")
     p.add_argument("--config", default=None, help="environment file (default: built-in)")
     p.add_argument("--out", default=None, help="folder for episodes.csv and summary.json")

@@ -6,10 +6,13 @@ import another to build what it plays. An agent is named by a spec:
 - ``scripted:NAME``: a strategy from :data:`graspenv_agents.scripted.STRATEGIES`;
 - ``random``: uniform random actions (seeded);
 - ``still``: a hand lying still on the table (no motion, every finger down);
-- a path: a stable-baselines3 model (``.zip``) or a ``graspenv train`` run folder
-  (its final policy ``policy.pt``, else ``model.zip``, else ``best_model.zip``). The
-  run's ``run.json`` supplies the algorithm and the environment arguments and
-  wrapper it was trained with, and its ``vecnormalize.pkl`` the observation
+- a path: a stable-baselines3 model (``.zip``), a ``graspenv train`` run folder
+  (its final policy ``policy.pt``, else ``model.zip``, else ``best_model.zip``) or
+  the run folder of a plain ``python -m rl_zoo3.train`` (its final model
+  ``<ENV>.zip``). The run's ``run.json``, or in a plain zoo run the zoo's own
+  ``<ENV>/args.yml`` and ``<ENV>/config.yml``, supplies the algorithm and the
+  environment arguments and wrapper it was trained with, and its
+  ``vecnormalize.pkl`` (the zoo keeps it in ``<ENV>/``) the observation
   normalisation.
 
 Nothing here imports stable-baselines3 or torch until a learned model is loaded
@@ -154,23 +157,64 @@ def load_agent(spec: str, seed: int = 0) -> AgentSpec:
     return _load_learned(Path(spec))
 
 
+def _zoo_settings(path: Path) -> Path | None:
+    """The folder of a plain zoo run's settings (``<ENV>/`` beside ``<ENV>.zip``)."""
+    settings = path.parent / path.stem
+    return settings if (settings / "args.yml").is_file() else None
+
+
+def _zoo_yaml(path: Path) -> dict[str, Any]:
+    """One of the zoo's ``args.yml`` or ``config.yml``: an ordered mapping the zoo
+    writes with PyYAML's Python tag, read here without constructing arbitrary
+    objects (only that tag is allowed)."""
+    import yaml
+
+    class Loader(yaml.SafeLoader):
+        pass
+
+    def ordered(loader: yaml.SafeLoader, node: yaml.Node) -> dict[str, Any]:
+        pairs = loader.construct_sequence(node.value[0], deep=True)
+        return {key: value for key, value in pairs}
+
+    Loader.add_constructor("tag:yaml.org,2002:python/object/apply:collections.OrderedDict", ordered)
+    data: dict[str, Any] = yaml.load(path.read_text(), Loader=Loader)
+    return data
+
+
+def _zoo_run(settings: Path) -> dict[str, Any]:
+    """What ``run.json`` holds, from a plain zoo run's settings folder."""
+    args = _zoo_yaml(settings / "args.yml")
+    return {
+        "algo": args["algo"],
+        "env_id": args["env"],
+        "hyperparams": _zoo_yaml(settings / "config.yml"),
+    }
+
+
 def _load_learned(path: Path) -> AgentSpec:
     if path.is_dir():
-        # The final policy first (what agents/policies/ ships), then the models.
-        for candidate in ("policy.pt", "model.zip", "best_model.zip"):
+        # The final policy first (what agents/policies/ ships), then the models, then
+        # a plain zoo run's final model.
+        zoo = [z.with_suffix(".zip") for z in path.iterdir() if (z / "args.yml").is_file()]
+        for candidate in ["policy.pt", "model.zip", "best_model.zip", *[z.name for z in zoo]]:
             if (path / candidate).is_file():
                 path = path / candidate
                 break
         else:
-            raise FileNotFoundError(f"no policy.pt, model.zip or best_model.zip in {path}")
+            raise FileNotFoundError(
+                f"no policy.pt, model.zip, best_model.zip or zoo model <ENV>.zip in {path}"
+            )
     if not path.is_file():
         raise FileNotFoundError(
             f"no model file {path} (agents are scripted:NAME, random, or a model path)"
         )
     folder = path.parent
     run: dict[str, Any] = {}
+    zoo_settings = _zoo_settings(path)
     if (folder / "run.json").is_file():
         run = json.loads((folder / "run.json").read_text())
+    elif zoo_settings is not None:
+        run = _zoo_run(zoo_settings)
     algos = [run["algo"]] if "algo" in run else list(ALGOS)
     settings = run.get("hyperparams", {})
     model = None
@@ -193,10 +237,15 @@ def _load_learned(path: Path) -> AgentSpec:
     # actions then cannot depend on how many cores a process (or a Ray worker) has.
     torch.set_num_threads(1)
     normalizer = None
-    if (folder / "vecnormalize.pkl").is_file():
-        with (folder / "vecnormalize.pkl").open("rb") as f:
-            normalizer = pickle.load(f)
-        normalizer.training = False
+    statistics = [folder / "vecnormalize.pkl"]
+    if zoo_settings is not None:
+        statistics.append(zoo_settings / "vecnormalize.pkl")
+    for pkl in statistics:
+        if pkl.is_file():
+            with pkl.open("rb") as f:
+                normalizer = pickle.load(f)
+            normalizer.training = False
+            break
     label = f"{run.get('algo', type(model).__name__.lower()).upper()} ({folder.name})"
     return AgentSpec(
         label,

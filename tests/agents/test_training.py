@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import shutil
 from pathlib import Path
 
 import cv2
@@ -145,6 +146,32 @@ def test_eval_accepts_the_trained_model(run_folder: Path, tmp_path: Path) -> Non
     assert len((out / "episodes.csv").read_text().splitlines()) == 3
 
 
+def test_eval_reads_a_plain_zoo_run(run_folder: Path, tmp_path: Path) -> None:
+    """What `python -m rl_zoo3.train` alone leaves (the final model <ENV>.zip and the
+    zoo's <ENV>/ settings, no run.json) is an agent too, with its wrapper and, for
+    PPO, its observation statistics."""
+    from graspenv_agents.loading import load_agent
+
+    name = "graspenv-TurnInPlace-v0"
+    zoo = tmp_path / "zoo_run"
+    zoo.mkdir()
+    shutil.copy(run_folder / f"{name}.zip", zoo / f"{name}.zip")
+    shutil.copytree(run_folder / name, zoo / name)
+    algo = json.loads((run_folder / "run.json").read_text())["algo"]
+    assert (zoo / name / "vecnormalize.pkl").is_file() == (algo == "ppo")
+    spec = load_agent(str(zoo))
+    assert spec.home == "graspenv/TurnInPlace-v0" and spec.kind == algo.upper()
+    assert spec.wrapper == "graspenv_agents.wrappers.RelativeGoal"
+    # The same model and statistics from either folder play the same episodes.
+    summaries = []
+    for folder in (zoo, run_folder):
+        out = tmp_path / f"eval_{folder.name}"
+        assert main(["eval", "--agent", str(folder), "--episodes", "2", "--out", str(out)]) == 0
+        summaries.append(json.loads((out / "summary.json").read_text()))
+    assert summaries[0]["success_rate"] == summaries[1]["success_rate"]
+    assert summaries[0]["mean_return"] == pytest.approx(summaries[1]["mean_return"])
+
+
 def test_eval_refuses_a_model_on_another_observation_space(
     run_folder: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -161,3 +188,23 @@ def test_eval_refuses_a_model_on_another_observation_space(
     )
     err = capsys.readouterr().err.strip()
     assert code == 2 and "\n" not in err and "shape" in err
+
+
+@pytest.mark.parametrize(
+    ("space_file", "env_id"),
+    [("sac.toml", "graspenv/TurnInPlace-v0"), ("ppo.toml", "graspenv/SidePush-v0")],
+)
+def test_the_committed_search_spaces_sweep_their_entries(space_file: str, env_id: str) -> None:
+    """Each search space under agents/hyperparams/tune loads, and sweeps hyperparameters
+    that the algorithm's zoo entry for the environment it was drawn for holds."""
+    from graspenv_agents.hyperparams import default_file, load_hyperparams
+    from graspenv_agents.tune import load_space
+
+    algo = space_file.removesuffix(".toml")
+    fixed, space = load_space(default_file(algo).parent / "tune" / space_file)
+    entry = load_hyperparams(env_id, algo)
+    assert fixed["n_timesteps"] > 0 and set(space) <= set(entry)
+    if algo == "ppo":  # SidePush's entry is the sweep's best trial (README)
+        for name, (kind, bounds) in space.items():
+            value = entry[name]
+            assert value in bounds if kind == "choice" else bounds[0] <= value <= bounds[1]

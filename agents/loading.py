@@ -157,10 +157,10 @@ def load_agent(spec: str, seed: int = 0) -> AgentSpec:
     return _load_learned(Path(spec))
 
 
-def _zoo_settings(path: Path) -> Path | None:
-    """The folder of a plain zoo run's settings (``<ENV>/`` beside ``<ENV>.zip``)."""
-    settings = path.parent / path.stem
-    return settings if (settings / "args.yml").is_file() else None
+def _zoo_settings(folder: Path) -> Path | None:
+    """The folder of a zoo run's settings (``<ENV>/`` beside ``<ENV>.zip``), if any."""
+    found = [z for z in sorted(folder.iterdir()) if (z / "args.yml").is_file()]
+    return found[0] if found else None
 
 
 def _zoo_yaml(path: Path) -> dict[str, Any]:
@@ -193,10 +193,11 @@ def _zoo_run(settings: Path) -> dict[str, Any]:
 
 def _load_learned(path: Path) -> AgentSpec:
     if path.is_dir():
-        # The final policy first (what agents/policies/ ships), then the models, then
-        # a plain zoo run's final model.
-        zoo = [z.with_suffix(".zip") for z in path.iterdir() if (z / "args.yml").is_file()]
-        for candidate in ["policy.pt", "model.zip", "best_model.zip", *[z.name for z in zoo]]:
+        # The final policy first (what agents/policies/ ships), then the final models
+        # (a plain zoo run's is <ENV>.zip), then the best evaluated one.
+        zoo = _zoo_settings(path)
+        final = [f"{zoo.name}.zip"] if zoo is not None else []
+        for candidate in ["policy.pt", "model.zip", *final, "best_model.zip"]:
             if (path / candidate).is_file():
                 path = path / candidate
                 break
@@ -210,7 +211,7 @@ def _load_learned(path: Path) -> AgentSpec:
         )
     folder = path.parent
     run: dict[str, Any] = {}
-    zoo_settings = _zoo_settings(path)
+    zoo_settings = _zoo_settings(folder)
     if (folder / "run.json").is_file():
         run = json.loads((folder / "run.json").read_text())
     elif zoo_settings is not None:

@@ -155,7 +155,8 @@ def test_eval_reads_a_plain_zoo_run(run_folder: Path, tmp_path: Path) -> None:
     name = "graspenv-TurnInPlace-v0"
     zoo = tmp_path / "zoo_run"
     zoo.mkdir()
-    shutil.copy(run_folder / f"{name}.zip", zoo / f"{name}.zip")
+    for model in (f"{name}.zip", "best_model.zip"):  # the final model is the one played
+        shutil.copy(run_folder / model, zoo / model)
     shutil.copytree(run_folder / name, zoo / name)
     algo = json.loads((run_folder / "run.json").read_text())["algo"]
     assert (zoo / name / "vecnormalize.pkl").is_file() == (algo == "ppo")

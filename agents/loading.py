@@ -192,11 +192,12 @@ def _zoo_run(settings: Path) -> dict[str, Any]:
 
 
 def _load_learned(path: Path) -> AgentSpec:
+    folder = path if path.is_dir() else path.parent
+    zoo_settings = _zoo_settings(folder) if folder.is_dir() else None
     if path.is_dir():
         # The final policy first (what agents/policies/ ships), then the final models
         # (a plain zoo run's is <ENV>.zip), then the best evaluated one.
-        zoo = _zoo_settings(path)
-        final = [f"{zoo.name}.zip"] if zoo is not None else []
+        final = [f"{zoo_settings.name}.zip"] if zoo_settings is not None else []
         for candidate in ["policy.pt", "model.zip", *final, "best_model.zip"]:
             if (path / candidate).is_file():
                 path = path / candidate
@@ -209,9 +210,7 @@ def _load_learned(path: Path) -> AgentSpec:
         raise FileNotFoundError(
             f"no model file {path} (agents are scripted:NAME, random, or a model path)"
         )
-    folder = path.parent
     run: dict[str, Any] = {}
-    zoo_settings = _zoo_settings(folder)
     if (folder / "run.json").is_file():
         run = json.loads((folder / "run.json").read_text())
     elif zoo_settings is not None:
@@ -238,15 +237,12 @@ def _load_learned(path: Path) -> AgentSpec:
     # actions then cannot depend on how many cores a process (or a Ray worker) has.
     torch.set_num_threads(1)
     normalizer = None
-    statistics = [folder / "vecnormalize.pkl"]
-    if zoo_settings is not None:
-        statistics.append(zoo_settings / "vecnormalize.pkl")
-    for pkl in statistics:
-        if pkl.is_file():
-            with pkl.open("rb") as f:
-                normalizer = pickle.load(f)
-            normalizer.training = False
-            break
+    beside = [folder] if zoo_settings is None else [folder, zoo_settings]
+    pkl = next((d / "vecnormalize.pkl" for d in beside if (d / "vecnormalize.pkl").is_file()), None)
+    if pkl is not None:
+        with pkl.open("rb") as f:
+            normalizer = pickle.load(f)
+        normalizer.training = False
     label = f"{run.get('algo', type(model).__name__.lower()).upper()} ({folder.name})"
     return AgentSpec(
         label,

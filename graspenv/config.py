@@ -24,6 +24,7 @@ from typing import Any, Literal, TypeVar
 
 __all__ = [
     "FIDELITY_PRESETS",
+    "MOST_VOTE_FRAMES",
     "PRESET_DRIFT_MM",
     "SPECK_AREA",
     "ConfigError",
@@ -45,6 +46,10 @@ __all__ = [
 #: The specks ``contacts.min_area = "auto"`` drops: smaller than four pixels of the
 #: default 0.61 × 0.46 m table at 640 × 480, m².
 SPECK_AREA = 4.0 * (0.61 / 640) * (0.46 / 480)
+
+#: The most masks ``contacts.vote_frames`` may vote over: a quarter of a second at
+#: 60 Hz, a lag of seven frames on every motion.
+MOST_VOTE_FRAMES = 15
 
 #: Particle sphere radius, metres, by default (``proxy.particle_radius``).
 DEFAULT_PARTICLE_RADIUS = 0.002
@@ -119,6 +124,14 @@ class ContactConfig:
             (the default) turns it off. A hole that flickers from frame to frame
             (a camera's dropout) is filled; one that stays is not, and a finger that
             moves leaves at most this much of its trailing edge behind for a frame.
+        vote_frames: take each pixel as touched where it was touched in most of the
+            last this many masks (odd, at most :data:`MOST_VOTE_FRAMES`), before the
+            closing and the fill; 1 (the default) turns it off. A component of the
+            frame's own mask that the vote would erase whole (a finger touching down,
+            or one moving further than its own width in a frame) is kept as it is.
+            It averages out edge jitter that changes from frame to frame, which the
+            closing and the fill do not, at the price of a lag of (n − 1)/2 frames on
+            a contact's motion and on a lift (README, "A real sensor's masks").
     """
 
     spacing: float | Literal["auto"] = "auto"
@@ -126,6 +139,7 @@ class ContactConfig:
     min_area: float | Literal["auto"] = "auto"
     close_px: int = 0
     fill_px: int = 0
+    vote_frames: int = 1
 
     def __post_init__(self) -> None:
         if self.spacing != "auto":
@@ -140,6 +154,17 @@ class ContactConfig:
         if self.close_px % 2 == 0 and self.close_px > 0:
             # An even kernel has no centre: OpenCV's closing then shifts the mask.
             raise ConfigError(f"contacts.close_px must be 0 or odd, got {self.close_px}")
+        votes = self.vote_frames
+        if not (
+            isinstance(votes, int)
+            and not isinstance(votes, bool)
+            and 1 <= votes <= MOST_VOTE_FRAMES
+            and votes % 2 == 1
+        ):
+            raise ConfigError(
+                f"contacts.vote_frames must be an odd whole number from 1 to "
+                f"{MOST_VOTE_FRAMES}, got {votes!r}"
+            )
 
     def min_area_pixels(self, pixel_area: float) -> float:
         """The smallest component kept, pixels, on a table whose pixels cover

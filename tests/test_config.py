@@ -183,3 +183,10 @@ def test_the_closing_needs_an_odd_kernel() -> None:
     assert load_config(None, contacts={"close_px": 5}).contacts.close_px == 5
     with pytest.raises(ConfigError, match="odd"):
         load_config(None, contacts={"close_px": 4})
+
+
+@pytest.mark.parametrize("value", [0, 2, 17, 3.0, True, "three"])
+def test_the_vote_takes_an_odd_count_of_frames(value: object) -> None:
+    with pytest.raises(ConfigError, match="vote_frames"):
+        load_config(None, contacts={"vote_frames": value})
+    assert load_config(None, contacts={"vote_frames": 5}).contacts.vote_frames == 5

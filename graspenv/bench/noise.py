@@ -6,9 +6,10 @@ masks seen through each noise level of :data:`LEVELS` (the two kinds of table of
 with each clean-up of :data:`CLEANUPS` in the contact pipeline: nothing, the
 smallest-contact filter (``contacts.min_area``, on by default), and the filter with
 a morphological closing (``contacts.close_px``), a fill of flickering dropouts from
-the previous frame (``contacts.fill_px``) or both, and both with the proxies'
-smoothing of followed contours (``proxy.smoothing``). Each run is played with two noise
-seeds at a sub-pixel placement of its own.
+the previous frame (``contacts.fill_px``) or both, both with the proxies'
+smoothing of followed contours (``proxy.smoothing``), and both after a vote of each
+pixel over the last three or five masks (``contacts.vote_frames``). Each run is
+played with two noise seeds at a sub-pixel placement of its own.
 
 Ground truth is the ideal rigid grasp: the object turns with the fingers and ends
 where they carry it. A level passes with a clean-up when every run's turn is within
@@ -83,6 +84,8 @@ CLEANUPS: dict[str, dict[str, dict[str, Any]]] = {
         "contacts": {"close_px": 5, "fill_px": 2},
         "proxy": {"smoothing": 0.5},
     },
+    "vote 3 + close 5 + fill 2": {"contacts": {"vote_frames": 3, "close_px": 5, "fill_px": 2}},
+    "vote 5 + close 5 + fill 2": {"contacts": {"vote_frames": 5, "close_px": 5, "fill_px": 2}},
 }
 
 #: The objects: the canonical box and the grid's hard corners of it (light, small,

@@ -56,6 +56,7 @@ ascending id.
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Literal, NamedTuple, TypeVar
@@ -300,6 +301,8 @@ class ContactTracker:
             else None
         )
         self._last_seen: NDArray[np.uint8] | None = None
+        # The last vote_frames masks as they came, for the vote (oldest first).
+        self._recent: deque[NDArray[np.uint8]] = deque(maxlen=self.config.vote_frames)
         # Pixels to world (Surface.pixel_to_world): x = (c + 0.5)·sx − w/2,
         # y = h/2 − (r + 0.5)·sy.
         sx, sy = surface.pixel_size
@@ -316,8 +319,11 @@ class ContactTracker:
         self._index = 0
 
     def _clean(self, image: NDArray[np.uint8]) -> NDArray[np.uint8]:
-        """The mask closed (``close_px``) and its dropouts filled (``fill_px``)."""
+        """The mask voted on over the last frames (``vote_frames``), closed
+        (``close_px``) and its dropouts filled (``fill_px``)."""
         clean: NDArray[np.uint8] = np.minimum(image, 1)  # any non-zero is touched
+        if self.config.vote_frames > 1:
+            clean = self._voted(clean)
         if self._close is not None:
             clean = np.asarray(cv2.morphologyEx(clean, cv2.MORPH_CLOSE, self._close), np.uint8)
         if self._fill is not None:
@@ -330,12 +336,32 @@ class ContactTracker:
             self._last_seen = seen
         return clean
 
+    def _voted(self, touched: NDArray[np.uint8]) -> NDArray[np.uint8]:
+        """Each pixel touched in most of the last ``vote_frames`` masks (``touched``
+        the newest, 0 or 1), with every component of ``touched`` that the vote would
+        erase whole kept as it is: a finger that just touched down, or one that moved
+        further than its own width since the last frame."""
+        recent = self._recent
+        recent.append(touched)
+        if len(recent) == 1:
+            return touched
+        votes = np.sum(recent, axis=0, dtype=np.uint8)
+        voted = np.asarray(votes > len(recent) // 2, np.uint8)
+        count, labels = cv2.connectedComponents(touched, connectivity=8)
+        if count > 1:
+            survives = np.bincount(labels[voted != 0], minlength=count) > 0
+            survives[0] = True  # the background is not a component
+            if not survives.all():
+                voted |= np.asarray(~survives, np.uint8)[labels]
+        return voted
+
     def reset(self) -> None:
         """Forget all contacts; ids and the frame index start again from 0."""
         self._previous = ContactFrame.empty()
         self._next_id = 0
         self._index = 0
         self._last_seen = None
+        self._recent.clear()
 
     def update(self, mask: object) -> ContactFrame:
         """Track the contacts of the next camera frame.
@@ -352,7 +378,7 @@ class ContactTracker:
                 surface's shape.
         """
         image = validate_mask(mask, self.surface.shape)
-        if self._close is not None or self._fill is not None:
+        if self.config.vote_frames > 1 or self._close is not None or self._fill is not None:
             image = self._clean(image)
         before = self._previous
         if cv2.countNonZero(image) == 0:  # a fifth of tracing an empty frame's borders

@@ -394,3 +394,58 @@ def test_fill_mends_a_flickering_dropout_but_not_a_lifted_finger(surface: Surfac
     tracker.reset()  # forgets the last mask: a notched first frame stays notched
     cut = ContactTracker(surface).update(notched).contacts[0].area
     assert tracker.update(notched).contacts[0].area == pytest.approx(cut)
+
+
+def test_the_vote_steadies_a_jittering_edge_and_mends_a_flickering_hole(
+    surface: Surface,
+) -> None:
+    # A still fingertip seen through a pixel of edge jitter that changes every frame:
+    # voted over three masks its centroid and area wobble less than as they come.
+    from graspenv.surface.noise import SensorNoise
+
+    mask = render_fingers(surface, [_finger(0.0, 0.0)])
+    jitter = SensorNoise(jitter=1.0)
+    rng = np.random.default_rng(0)
+    masks = [jitter.apply(mask, rng) for _ in range(100)]
+    spread = {}
+    for votes in (1, 3):
+        tracker = ContactTracker(surface, ContactConfig(vote_frames=votes))
+        seen = [tracker.update(m).contacts[0] for m in masks][votes:]
+        centroids = np.array([c.centroid for c in seen])
+        spread[votes] = (
+            float(np.linalg.norm(centroids.std(axis=0))),
+            float(np.std([c.area for c in seen])),
+        )
+    assert spread[3][0] < 0.75 * spread[1][0]
+    assert spread[3][1] < 0.75 * spread[1][1]
+    # A dropout in one frame is outvoted by the two before it.
+    whole, notched = _notched(surface)
+    tracker = ContactTracker(surface, ContactConfig(vote_frames=3))
+    area = [tracker.update(m).contacts[0].area for m in (whole, whole, notched)]
+    assert area[2] == pytest.approx(area[0])
+    assert ContactTracker(surface).update(notched).contacts[0].area < area[0]
+
+
+def test_the_vote_keeps_a_new_touch_and_a_fast_finger_but_lags_a_lift(
+    surface: Surface,
+) -> None:
+    tracker = ContactTracker(surface, ContactConfig(vote_frames=3))
+    alone = ContactTracker(surface)
+    one, two = _finger(-0.1, 0.0), _finger(0.1, 0.0)
+    for fingers in ([one], [one], [one, two]):  # the second touches down
+        frame = _frame(tracker, fingers)
+    plain = _frame(alone, [one, two])
+    assert len(frame) == 2
+    assert [c.area for c in frame] == pytest.approx([c.area for c in plain])
+    # A finger 5 cm from where it was (faster than its own width a frame) is seen
+    # where it is, not erased.
+    frame = _frame(tracker, [one, _finger(0.15, 0.0)])
+    assert len(frame) == 2
+    assert _nearest(frame, (0.15, 0.0)) in frame.contact_ids
+    assert min(float(np.hypot(*(c.centroid - (0.15, 0.0)))) for c in frame) < 1e-3
+    # A lift is outvoted for a frame: two of the last three masks still hold it.
+    assert len(_frame(tracker, [one, _finger(0.15, 0.0)])) == 2
+    assert len(_frame(tracker, [one])) == 2
+    assert len(_frame(tracker, [one])) == 1
+    tracker.reset()  # forgets the masks: the next frame is taken as it is
+    assert len(_frame(tracker, [one, two])) == 2

@@ -186,8 +186,17 @@ def _bench(args: argparse.Namespace) -> int:
             results = module.read_csv(Path(args.from_csv))
         else:
             run = grid.run_grid if args.grid else noise.run_noise
+            extra: dict[str, Any] = {}
+            if args.noise and args.noise_seeds:
+                extra["seeds"] = args.noise_seeds
+            if args.noise and args.noise_level:
+                extra["levels"] = args.noise_level
             results = run(
-                config=args.config, progress=say, workers=args.workers, preset=args.preset
+                config=args.config,
+                progress=say,
+                workers=args.workers,
+                preset=args.preset,
+                **extra,
             )
         print(module.summary(results))
         return wrote(module.write_outputs(results, Path(args.out)))
@@ -288,6 +297,21 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
         "frame (fuzz.csv); exit 1 if any broke",
     )
     p.add_argument("--seed", type=int, default=0, help="--fuzz: the first episode's seed")
+    p.add_argument(
+        "--noise-seeds",
+        type=int,
+        nargs="+",
+        default=None,
+        metavar="SEED",
+        help="--noise: the noise seeds, each at a placement of its own (default: 0 1)",
+    )
+    p.add_argument(
+        "--noise-level",
+        action="append",
+        default=None,
+        metavar="LEVEL",
+        help="--noise: only this level (clean, ftir, di, 'di x2', 'di x4'); repeat for more",
+    )
     p.add_argument(
         "--ray",
         action="store_true",

@@ -389,18 +389,20 @@ class PhysicsConfig:
             below) every frame gets exactly ``substeps``. At 16 one of 10 000 fuzz
             episodes broke (a light box rattling in stick-slip on a table of friction
             1.8 let a particle 1.03 mm into it in a frame at the cap); at 32 none
-            did, before the particles of heavy objects were made heavier (since then one
-            does: seed 4192, in a frame of 7 sub-steps, not at the cap). Slow frames
-            never reach it; ``fast`` keeps 16.
+            did, before the particles of heavy objects were made heavier (then one
+            did, in a frame of 7 sub-steps, until ``substep_travel`` became 0.25 mm).
+            Slow frames never reach it; ``fast`` keeps 16.
         substep_travel: the farthest an object's point or a particle may move in one
             physics step, metres: a frame whose fastest point would move further
             gets as many more steps as that needs, up to ``max_substeps``. Bullet's
             box contacts tip and sink a turned box at longer steps, and a particle
             moving further than this in a step ends deeper in what it meets
-            (docs/design.md, section 3b). The default, 0.3 mm, is what the
-            reduced-coordinate objects need: at 0.5 mm a box on a table of
-            friction 2 rattles in stick-slip and a particle ends 1.15 mm inside
-            it (1 mm allowed).
+            (docs/design.md, section 3b). The reduced-coordinate objects need 0.3
+            mm at most: at 0.5 mm a box on a table of friction 2 rattles in
+            stick-slip and a particle ends 1.15 mm inside it (1 mm allowed). At
+            0.3 mm one of 10 000 long-fuzz episodes broke (a 99 g particle driven
+            1.79 mm into a 991 g box squeezed by four fingers); at the default,
+            0.25 mm, none do.
         solver_iterations: Bullet's constraint solver iterations (the most; an
             island stops earlier once converged). A firm grip's island converges
             slowly: at 50 a box squeezed 4.5 mm deep rocked out of a still grip and
@@ -446,7 +448,7 @@ class PhysicsConfig:
 
     substeps: int = 4
     max_substeps: int = 32
-    substep_travel: float = 0.0003
+    substep_travel: float = 0.00025
     solver_iterations: int = 150
     gravity: float = 9.81
     table_friction: float = 0.5
@@ -587,7 +589,7 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
     "reference": {
         "physics": {
             "substeps": 8,
-            "substep_travel": 0.0003,
+            "substep_travel": 0.00025,
             "max_substeps": 32,
             "solver_iterations": 300,
             "reduced_objects": True,
@@ -604,8 +606,9 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 #: the worst scenario is the flick for ``fast`` and the two-hand carry for
 #: ``default`` (measured 2026-12-05, ``graspenv bench --replays 1``, with
 #: reduced-coordinate objects and 150 solver iterations at the default, 300 at
-#: ``reference``; ``fast`` keeps maximal-coordinate ones and 50 iterations).
-PRESET_DRIFT_MM: dict[str, float] = {"fast": 17.75, "default": 0.09, "reference": 0.0}
+#: ``reference``; ``fast`` keeps maximal-coordinate ones and 50 iterations; 0.25 mm a
+#: sub-step at the default and ``reference``: 17.75 and 0.089 mm at 0.3).
+PRESET_DRIFT_MM: dict[str, float] = {"fast": 17.68, "default": 0.08, "reference": 0.0}
 
 
 def choose_fidelity(error_budget_mm: float) -> str:

@@ -99,15 +99,19 @@ def line_chart(
     ylim: tuple[float, float] | None = None,
     size: tuple[int, int] = (720, 420),
     categories: Sequence[str] = (),
+    guides: Mapping[str, float] | None = None,
 ) -> NDArray[np.uint8]:
     """One line per series ``name → (x, y)``, points marked (non-finite y left out);
-    with ``categories`` the x values 0, 1, ... are those names. Written as PNG when
-    ``path`` is given."""
+    with ``categories`` the x values 0, 1, ... are those names; each of ``guides``
+    (``name → y``, a target) a dashed grey line across. Written as PNG when ``path``
+    is given."""
     fig, ax = _figure(size)
     for name, (x, y) in series.items():
         xs, ys = np.asarray(x, float), np.asarray(y, float)
         keep = np.isfinite(ys)
         ax.plot(xs[keep], ys[keep], marker="o", markersize=3, linewidth=1.6, label=name)
+    for name, level in (guides or {}).items():
+        ax.axhline(level, color="0.35", linestyle="--", linewidth=1.2, label=name)
     xs_all = [float(v) for x, _ in series.values() for v in x]
     if xs_all:
         ax.set_xlim(min(0.0, min(xs_all)), max(xs_all) if max(xs_all) > 0 else 1.0)

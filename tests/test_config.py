@@ -190,3 +190,12 @@ def test_the_vote_takes_an_odd_count_of_frames(value: object) -> None:
     with pytest.raises(ConfigError, match="vote_frames"):
         load_config(None, contacts={"vote_frames": value})
     assert load_config(None, contacts={"vote_frames": 5}).contacts.vote_frames == 5
+
+
+def test_the_di_table_file_is_the_default_scene_with_the_di_clean_ups() -> None:
+    scene = load_config(CONFIGS / "di_table.toml")
+    contacts = scene.contacts
+    assert (contacts.vote_frames, contacts.close_px, contacts.fill_px) == (3, 5, 2)
+    assert scene.replace(contacts={"vote_frames": 1, "close_px": 0, "fill_px": 0}) == (
+        SceneConfig()
+    )

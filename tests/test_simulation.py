@@ -301,7 +301,7 @@ def test_make_simulation_takes_the_environments_presets() -> None:
     # A scene file's coarser sub-stepping does not carry into its reference.
     coarse = {"physics": {"max_substeps": 8, "substep_travel": 0.002}}
     with graspenv.make_simulation(coarse, fidelity="reference") as sim:
-        assert (sim.config.physics.max_substeps, sim.config.physics.substep_travel) == (32, 3e-4)
+        assert (sim.config.physics.max_substeps, sim.config.physics.substep_travel) == (32, 2.5e-4)
     with graspenv.make_simulation() as sim:
         assert sim.config == load_config(None)
     # auto picks the cheapest preset within the budget (PRESET_DRIFT_MM).

@@ -132,11 +132,17 @@ class NoiseRun:
 Job = tuple[str, str, Cell, int, str | None, str]
 
 
-def _jobs(cells: Sequence[Cell], config: str | None, preset: str) -> list[Job]:
+def _jobs(
+    cells: Sequence[Cell],
+    config: str | None,
+    preset: str,
+    seeds: Sequence[int],
+    levels: Sequence[str],
+) -> list[Job]:
     jobs: list[Job] = []
-    for seed in SEEDS:
+    for seed in seeds:
         for cell in placed(cells, seed):
-            for level in LEVELS:
+            for level in levels:
                 for cleanup in CLEANUPS:
                     jobs.append((level, cleanup, cell, seed, config, preset))
     return jobs
@@ -160,12 +166,21 @@ def run_noise(
     progress: Callable[[str], None] | None = None,
     config: str | None = None,
     preset: str = "default",
+    seeds: Sequence[int] = SEEDS,
+    levels: Sequence[str] = tuple(LEVELS),
 ) -> list[NoiseRun]:
-    """Every object at every level with every clean-up and seed, in ``workers``
+    """Every object at every level of ``levels`` (names of :data:`LEVELS`) with every
+    clean-up and noise seed (each seed at a placement of its own), in ``workers``
     processes, on the scene file ``config`` (or the built-in default) at a fidelity
     ``preset``."""
     base_scene(config, preset)  # a bad file or preset fails here, not in a worker
-    jobs = _jobs(cells, config, preset)
+    unknown = sorted(set(levels) - set(LEVELS))
+    if unknown or not levels or not seeds:
+        raise ValueError(
+            f"the noise bench needs at least one seed and one level of {list(LEVELS)}, "
+            f"got seeds {list(seeds)} and levels {list(levels)}"
+        )
+    jobs = _jobs(cells, config, preset, seeds, levels)
     return collect_jobs(measure, jobs, workers, progress, _describe)
 
 
@@ -246,7 +261,6 @@ def chart(runs: Sequence[NoiseRun], path: Path) -> Path:
         for cleanup in CLEANUPS:
             ys = [min(_worst(runs, level, cleanup)[index], top) for level in levels]
             series[cleanup] = (x, ys)
-        series[f"target {target:g}"] = ([0, len(levels) - 1], [target, target])
         panels.append(
             line_chart(
                 series,
@@ -257,6 +271,7 @@ def chart(runs: Sequence[NoiseRun], path: Path) -> Path:
                 ylim=(0.0, top),
                 size=(620, 400),
                 categories=levels,
+                guides={f"target {target:g}": target},
             )
         )
     return write_png(np.concatenate(panels, axis=1), path)

@@ -328,13 +328,24 @@ class ContactTracker:
             clean = np.asarray(cv2.morphologyEx(clean, cv2.MORPH_CLOSE, self._close), np.uint8)
         if self._fill is not None:
             # Fill this frame's dropouts from the last frame's mask, but only within
-            # fill_px of what is touched now (a lifted finger is not kept).
+            # fill_px of what is touched now (a lifted finger is not kept), specks
+            # aside: a flipped pixel beside a lifted finger would keep a piece of it.
             seen = clean
             if self._last_seen is not None:
-                near = np.asarray(cv2.dilate(clean, self._fill), np.uint8)
+                near = np.asarray(cv2.dilate(self._without_specks(clean), self._fill), np.uint8)
                 clean = clean | (self._last_seen & near)
             self._last_seen = seen
         return clean
+
+    def _without_specks(self, touched: NDArray[np.uint8]) -> NDArray[np.uint8]:
+        """``touched`` (0 or 1) without its components of fewer than ``min_area``
+        pixels."""
+        if self._min_area <= 1.0:
+            return touched
+        _, labels, stats, _ = cv2.connectedComponentsWithStats(touched, connectivity=8)
+        kept = stats[:, cv2.CC_STAT_AREA] >= self._min_area
+        kept[0] = False  # the background
+        return np.asarray(kept[labels], np.uint8)
 
     def _voted(self, touched: NDArray[np.uint8]) -> NDArray[np.uint8]:
         """Each pixel touched in most of the last ``vote_frames`` masks (``touched``

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from graspenv.bench import noise
 from graspenv.bench.grid import Cell, placed
 
@@ -35,3 +37,13 @@ def test_a_grasp_under_di_masks_holds_once_each_pixel_is_voted_on() -> None:
     voted = noise.measure(("di", "vote 3 + close 5 + fill 2", cell, 0, None, "default"))
     assert abs(raw.turn_error_deg) > 2 * noise.TURN_TARGET_DEG
     assert voted.ok, voted
+
+
+def test_the_bench_plays_the_levels_and_seeds_asked_for() -> None:
+    jobs = noise._jobs(noise.CELLS, None, "default", (3, 4), ("di",))
+    assert {job[0] for job in jobs} == {"di"} and {job[3] for job in jobs} == {3, 4}
+    assert len(jobs) == 2 * len(noise.CELLS) * len(noise.CLEANUPS)
+    with pytest.raises(ValueError, match="level"):
+        noise.run_noise(levels=["dim"])
+    with pytest.raises(ValueError, match="seed"):
+        noise.run_noise(seeds=[])

@@ -394,6 +394,13 @@ def test_fill_mends_a_flickering_dropout_but_not_a_lifted_finger(surface: Surfac
     tracker.reset()  # forgets the last mask: a notched first frame stays notched
     cut = ContactTracker(surface).update(notched).contacts[0].area
     assert tracker.update(notched).contacts[0].area == pytest.approx(cut)
+    # The finger lifts with a flipped pixel beside its edge: a speck does not keep
+    # a piece of it either.
+    rows, cols = np.nonzero(mask)
+    speck = np.zeros_like(mask)
+    speck[round(float(rows.mean())), cols.max() + 1] = 1
+    tracker.update(mask)
+    assert len(tracker.update(speck)) == 0
 
 
 def test_the_vote_steadies_a_jittering_edge_and_mends_a_flickering_hole(

@@ -167,6 +167,8 @@ def _bench(args: argparse.Namespace) -> int:
     from graspenv.bench.results import markdown_table, read_csv, write_outputs
     from graspenv.bench.scenarios import SCENARIOS
 
+    if (args.noise_seeds or args.noise_level) and not (args.noise and args.from_csv is None):
+        raise ValueError("--noise-seeds and --noise-level go with --noise (and not --from-csv)")
     if args.speed:
         from graspenv.bench.speed import run_speed
 
@@ -187,10 +189,10 @@ def _bench(args: argparse.Namespace) -> int:
         else:
             run = grid.run_grid if args.grid else noise.run_noise
             extra: dict[str, Any] = {}
-            if args.noise and args.noise_seeds:
-                extra["seeds"] = args.noise_seeds
-            if args.noise and args.noise_level:
-                extra["levels"] = args.noise_level
+            if args.noise_seeds:
+                extra["seeds"] = list(dict.fromkeys(args.noise_seeds))
+            if args.noise_level:
+                extra["levels"] = list(dict.fromkeys(args.noise_level))
             results = run(
                 config=args.config,
                 progress=say,
@@ -307,10 +309,10 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument(
         "--noise-level",
-        action="append",
+        nargs="+",
         default=None,
         metavar="LEVEL",
-        help="--noise: only this level (clean, ftir, di, 'di x2', 'di x4'); repeat for more",
+        help="--noise: only these levels (clean, ftir, di, 'di x2', 'di x4')",
     )
     p.add_argument(
         "--ray",

@@ -72,20 +72,38 @@ LEVELS: dict[str, SensorNoise | None] = {
     "di x4": TABLE_NOISE["di"].scaled(4.0),
 }
 
+
+def _cleanup(
+    min_area: float | str = "auto",
+    close: int = 0,
+    fill: int = 0,
+    votes: int = 1,
+    smoothing: float = 1.0,
+) -> dict[str, dict[str, Any]]:
+    """One clean-up as scene sections, every clean-up setting given, so that a scene
+    file's own (``envs_configs/di_table.toml``) does not carry into the others."""
+    return {
+        "contacts": {
+            "min_area": min_area,
+            "close_px": close,
+            "fill_px": fill,
+            "vote_frames": votes,
+        },
+        "proxy": {"smoothing": smoothing},
+    }
+
+
 #: The clean-ups: the contact pipeline's (contacts-section overrides) and the
 #: proxies' smoothing of followed contours (proxy section), as scene sections.
 CLEANUPS: dict[str, dict[str, dict[str, Any]]] = {
-    "none": {"contacts": {"min_area": 0.0}},
-    "speck filter": {},
-    "filter + close 5 px": {"contacts": {"close_px": 5}},
-    "filter + fill 2 px": {"contacts": {"fill_px": 2}},
-    "filter + close 5 + fill 2": {"contacts": {"close_px": 5, "fill_px": 2}},
-    "close 5 + fill 2 + smoothing 0.5": {
-        "contacts": {"close_px": 5, "fill_px": 2},
-        "proxy": {"smoothing": 0.5},
-    },
-    "vote 3 + close 5 + fill 2": {"contacts": {"vote_frames": 3, "close_px": 5, "fill_px": 2}},
-    "vote 5 + close 5 + fill 2": {"contacts": {"vote_frames": 5, "close_px": 5, "fill_px": 2}},
+    "none": _cleanup(min_area=0.0),
+    "speck filter": _cleanup(),
+    "filter + close 5 px": _cleanup(close=5),
+    "filter + fill 2 px": _cleanup(fill=2),
+    "filter + close 5 + fill 2": _cleanup(close=5, fill=2),
+    "close 5 + fill 2 + smoothing 0.5": _cleanup(close=5, fill=2, smoothing=0.5),
+    "vote 3 + close 5 + fill 2": _cleanup(close=5, fill=2, votes=3),
+    "vote 5 + close 5 + fill 2": _cleanup(close=5, fill=2, votes=5),
 }
 
 #: The objects: the canonical box and the grid's hard corners of it (light, small,
@@ -175,11 +193,10 @@ def run_noise(
     ``preset``."""
     base_scene(config, preset)  # a bad file or preset fails here, not in a worker
     unknown = sorted(set(levels) - set(LEVELS))
-    if unknown or not levels or not seeds:
-        raise ValueError(
-            f"the noise bench needs at least one seed and one level of {list(LEVELS)}, "
-            f"got seeds {list(seeds)} and levels {list(levels)}"
-        )
+    if unknown or not levels:
+        raise ValueError(f"noise levels must be some of {list(LEVELS)}, got {list(levels)}")
+    if not seeds or any(seed < 0 for seed in seeds):
+        raise ValueError(f"noise seeds must be one or more whole numbers >= 0, got {list(seeds)}")
     jobs = _jobs(cells, config, preset, seeds, levels)
     return collect_jobs(measure, jobs, workers, progress, _describe)
 

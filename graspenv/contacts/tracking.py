@@ -56,6 +56,7 @@ ascending id.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass, field
@@ -276,6 +277,14 @@ class ContactFrame:
         return len(self.contact_ids)
 
 
+#: A component of a frame's mask of which the vote (``contacts.vote_frames``) keeps
+#: less than this share is taken as it is. The vote keeps a still fingertip under a
+#: pixel of edge jitter nearly whole, and a round one moving a quarter of its width
+#: a frame about two thirds (it lags a frame); from about two fifths of its width a
+#: frame it would keep less than half, cut into slivers or erased.
+VOTE_KEEPS = 0.5
+
+
 class ContactTracker:
     """Turns a stream of contact masks into tracked contacts.
 
@@ -349,22 +358,38 @@ class ContactTracker:
 
     def _voted(self, touched: NDArray[np.uint8]) -> NDArray[np.uint8]:
         """Each pixel touched in most of the last ``vote_frames`` masks (``touched``
-        the newest, 0 or 1), with every component of ``touched`` that the vote would
-        erase whole kept as it is: a finger that just touched down, or one that moved
-        further than its own width since the last frame."""
+        the newest, 0 or 1), but for the components of ``touched`` of which the vote
+        keeps less than :data:`VOTE_KEEPS`: a finger that just touched down, or one
+        that moved more than about two fifths of its width since the last frame,
+        which the vote would erase or cut into slivers. Each of those is taken as it
+        is, and the voted pixels where it was (within twice its width, in no part
+        of a contact the vote keeps) are dropped."""
         recent = self._recent
         recent.append(touched)
         if len(recent) == 1:
             return touched
         votes = np.sum(recent, axis=0, dtype=np.uint8)
-        voted = np.asarray(votes > len(recent) // 2, np.uint8)
+        voted = votes > len(recent) // 2
         count, labels = cv2.connectedComponents(touched, connectivity=8)
-        if count > 1:
-            survives = np.bincount(labels[voted != 0], minlength=count) > 0
-            survives[0] = True  # the background is not a component
-            if not survives.all():
-                voted |= np.asarray(~survives, np.uint8)[labels]
-        return voted
+        kept = np.bincount(labels[voted], minlength=count)
+        area = np.bincount(labels.ravel(), minlength=count)
+        moved = kept < VOTE_KEEPS * area
+        moved[0] = False  # the background is not a component
+        if not moved.any():
+            return np.asarray(voted, np.uint8)
+        as_seen = moved[labels]
+        reach = 2 * round(2.0 * math.sqrt(float(area[moved].max()))) + 1
+        trail = cv2.dilate(
+            as_seen.astype(np.uint8), cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (reach, reach))
+        )
+        parts, where = cv2.connectedComponents(np.asarray(voted, np.uint8), connectivity=8)
+        steady = np.zeros(parts, bool)
+        steady[where[voted & (labels > 0) & ~as_seen]] = True
+        left = np.zeros(parts, bool)
+        left[where[voted & (trail != 0)]] = True
+        left &= ~steady
+        left[0] = False
+        return np.asarray(voted & ~left[where] | as_seen, np.uint8)
 
     def reset(self) -> None:
         """Forget all contacts; ids and the frame index start again from 0."""

@@ -43,7 +43,18 @@ def test_the_bench_plays_the_levels_and_seeds_asked_for() -> None:
     jobs = noise._jobs(noise.CELLS, None, "default", (3, 4), ("di",))
     assert {job[0] for job in jobs} == {"di"} and {job[3] for job in jobs} == {3, 4}
     assert len(jobs) == 2 * len(noise.CELLS) * len(noise.CLEANUPS)
-    with pytest.raises(ValueError, match="level"):
+    with pytest.raises(ValueError, match=r"levels must be .* got \['dim'\]"):
         noise.run_noise(levels=["dim"])
-    with pytest.raises(ValueError, match="seed"):
+    with pytest.raises(ValueError, match=r"seeds must be .* got \[\]"):
         noise.run_noise(seeds=[])
+    with pytest.raises(ValueError, match=r"seeds must be .* got \[-1\]"):
+        noise.run_noise(seeds=[-1])
+
+
+def test_a_scene_files_clean_ups_do_not_carry_into_the_benchs_own() -> None:
+    # Every clean-up sets every clean-up setting: the DI table's file (vote, closing
+    # and fill on) leaves "speck filter" plain.
+    di_table = Path(__file__).resolve().parents[2] / "envs_configs" / "di_table.toml"
+    base = noise.base_scene(str(di_table), "default")
+    plain = base.replace(**noise.CLEANUPS["speck filter"]).contacts
+    assert (plain.vote_frames, plain.close_px, plain.fill_px) == (1, 0, 0)

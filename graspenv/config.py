@@ -120,15 +120,18 @@ class ContactConfig:
             against noise level with ``graspenv bench --noise`` (README, "A real
             sensor's masks").
         fill_px: fill a frame's dropouts from the previous frame's mask, but only
-            within this many pixels of what is touched now (after the closing); 0
-            (the default) turns it off. A hole that flickers from frame to frame
-            (a camera's dropout) is filled; one that stays is not, and a finger that
-            moves leaves at most this much of its trailing edge behind for a frame.
+            within this many pixels of what is touched now (after the closing;
+            specks smaller than ``min_area`` do not count, so a flipped pixel beside
+            a lifted finger keeps nothing of it); 0 (the default) turns it off. A
+            hole that flickers from frame to frame (a camera's dropout) is filled;
+            one that stays is not, and a finger that moves leaves at most this much
+            of its trailing edge behind for a frame.
         vote_frames: take each pixel as touched where it was touched in most of the
             last this many masks (odd, at most :data:`MOST_VOTE_FRAMES`), before the
             closing and the fill; 1 (the default) turns it off. A component of the
-            frame's own mask that the vote would erase whole (a finger touching down,
-            or one moving further than its own width in a frame) is kept as it is.
+            frame's own mask of which the vote keeps less than half (a finger
+            touching down, or one moving more than about two fifths of its width in
+            a frame) is taken as it is, without the voted pixels where it was.
             It averages out edge jitter that changes from frame to frame, which the
             closing and the fill do not, at the price of a lag of (n − 1)/2 frames on
             a contact's motion and on a lift (README, "A real sensor's masks").

@@ -358,12 +358,12 @@ class ContactTracker:
 
     def _voted(self, touched: NDArray[np.uint8]) -> NDArray[np.uint8]:
         """Each pixel touched in most of the last ``vote_frames`` masks (``touched``
-        the newest, 0 or 1), but for the components of ``touched`` of which the vote
-        keeps less than :data:`VOTE_KEEPS`: a finger that just touched down, or one
-        that moved more than about two fifths of its width since the last frame,
-        which the vote would erase or cut into slivers. Each of those is taken as it
-        is, and the voted pixels where it was (within twice its width, in no part
-        of a contact the vote keeps) are dropped."""
+        the newest, 0 or 1), but for the components of ``touched`` of at least
+        ``min_area`` of which the vote keeps less than :data:`VOTE_KEEPS`: a finger
+        that just touched down, or one that moved more than about two fifths of its
+        width since the last frame, which the vote would erase or cut into slivers.
+        Each of those is taken as it is, and the voted pixels where it was (within
+        twice its width, in no part of a contact the vote keeps) are dropped."""
         recent = self._recent
         recent.append(touched)
         if len(recent) == 1:
@@ -373,7 +373,9 @@ class ContactTracker:
         count, labels = cv2.connectedComponents(touched, connectivity=8)
         kept = np.bincount(labels[voted], minlength=count)
         area = np.bincount(labels.ravel(), minlength=count)
-        moved = kept < VOTE_KEEPS * area
+        # Specks are left to the vote: taken as they are, a flipped pixel beside a
+        # finger that lifted would drop that finger's last voted frame alone.
+        moved = (kept < VOTE_KEEPS * area) & (area >= self._min_area)
         moved[0] = False  # the background is not a component
         if not moved.any():
             return np.asarray(voted, np.uint8)

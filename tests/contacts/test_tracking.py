@@ -476,3 +476,22 @@ def test_a_voted_finger_stays_one_contact_at_any_speed(
         share = [c.area / s.area for c, s in zip(frame, seen, strict=True)]
         assert min(share) >= 0.5 and max(share) < 1.05, (k, share)
     assert len(ids) == 2
+
+
+def test_a_pair_lifting_together_stays_a_frame_together_under_the_vote(
+    surface: Surface,
+) -> None:
+    # Both fingertips lift at once, a flipped pixel beside one of them: the vote
+    # keeps both for the frame it lags a lift, not one alone (which would push what
+    # they held), and the speck is voted away.
+    one, two = _finger(-0.05, 0.0), _finger(0.05, 0.0)
+    mask = render_fingers(surface, [one, two])
+    rows, cols = np.nonzero(render_fingers(surface, [one]))
+    speck = np.zeros_like(mask)
+    speck[round(float(rows.mean())), cols.max() + 2] = 1
+    tracker = ContactTracker(surface, ContactConfig(vote_frames=3))
+    for _ in range(3):
+        tracker.update(mask)
+    lagged = tracker.update(speck)
+    assert len(lagged) == 2
+    assert len(tracker.update(speck)) == 0  # the speck filter drops the speck

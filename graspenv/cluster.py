@@ -52,7 +52,10 @@ def connect(address: str | None = None, num_cpus: int | None = None) -> dict[str
 
     if not ray.is_initialized():
         if address is None:
+            # "local": a new instance even where another run left one on this
+            # machine (joining it would fail on num_cpus, or share its cores).
             ray.init(
+                address="local",
                 num_cpus=num_cpus,
                 include_dashboard=False,
                 _node_ip_address="127.0.0.1",

@@ -312,6 +312,7 @@ class ContactTracker:
         self._last_seen: NDArray[np.uint8] | None = None
         # The last vote_frames masks as they came, for the vote (oldest first).
         self._recent: deque[NDArray[np.uint8]] = deque(maxlen=self.config.vote_frames)
+        self._cleans = self.config.vote_frames > 1 or close > 1 or fill > 0
         # Pixels to world (Surface.pixel_to_world): x = (c + 0.5)·sx − w/2,
         # y = h/2 − (r + 0.5)·sy.
         sx, sy = surface.pixel_size
@@ -416,7 +417,7 @@ class ContactTracker:
                 surface's shape.
         """
         image = validate_mask(mask, self.surface.shape)
-        if self.config.vote_frames > 1 or self._close is not None or self._fill is not None:
+        if self._cleans:
             image = self._clean(image)
         before = self._previous
         if cv2.countNonZero(image) == 0:  # a fifth of tracing an empty frame's borders

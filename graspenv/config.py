@@ -446,6 +446,18 @@ class PhysicsConfig:
             grip stiffness. It is kept apart from the sub-step so that more sub-steps
             resolve the same law more finely instead of stiffening it; the law uses
             the sub-step instead when that is longer (the law is unstable otherwise).
+        stiff_tangent: an experiment, off in every preset: along an object's side
+            (a particle within two radii of one) the law's Δt is the configured
+            sub-step where that is shorter than ``control_time`` (at eight
+            sub-steps, four times as stiff), across it ``control_time``, so the
+            squeeze keeps its force while the grip gives less under a load along
+            the side (the table's friction on a turn, a push on a held cylinder).
+            No change at four sub-steps or fewer. At ``reference`` it took the
+            canonical turn from 0.13° to 0.09° and slipped 21 of the grid's 25
+            cylinders within 5 % of Coulomb instead of 14, but slipped the 3 cm
+            cylinders 23–75 % short (the squeeze's preload along a side curved
+            within a fingertip's width) and the noisy turn grew (README, "Speed
+            against error").
         pool_batch: particle bodies created at start and at each growth of the pool.
     """
 
@@ -463,6 +475,7 @@ class PhysicsConfig:
     reduced_objects: bool = True
     contact_erp: float = 0.4
     control_time: float = 1.0 / 240.0
+    stiff_tangent: bool = False
     pool_batch: int = 64
 
     def __post_init__(self) -> None:

@@ -22,6 +22,7 @@ __all__ = [
     "convex_hull",
     "footprint",
     "footprint_depths",
+    "footprint_normals",
     "inscribed_radius",
     "reach_from",
     "rotate",
@@ -226,22 +227,7 @@ def footprint_depths(
         r = rotations[o]
         cx, cy = positions[o, 0], positions[o, 1]
         if shapes[o] == 0:
-            normals = np.zeros((3, 2))
-            reach = np.zeros(3)
-            axes = np.empty((3, 2))
-            for i in range(3):
-                axes[i, 0] = r[i] * sizes[o, i] / 2
-                axes[i, 1] = r[3 + i] * sizes[o, i] / 2
-            count = 0
-            for i in range(3):
-                length = np.hypot(axes[i, 0], axes[i, 1])
-                if length <= 1e-12:  # seen end-on: no edges of its own
-                    continue
-                nx, ny = -axes[i, 1] / length, axes[i, 0] / length
-                normals[count, 0], normals[count, 1] = nx, ny
-                for j in range(3):
-                    reach[count] += abs(nx * axes[j, 0] + ny * axes[j, 1])
-                count += 1
+            normals, reach, count = _box_edges(r, sizes[o])
             for k in range(n):
                 dx, dy = points[k, 0] - cx, points[k, 1] - cy
                 value = np.inf
@@ -259,6 +245,79 @@ def footprint_depths(
                 best[k] = depth[k]
                 owner[k] = o
     return owner, best
+
+
+@njit
+def _box_edges(
+    r: NDArray[np.float64], size: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
+    """A box's shadow on the table (:func:`footprint_depths`): the unit normals of its
+    edge pairs, (3, 2), their distances from the centre, (3,), and how many of the
+    three rows are used (an axis seen end-on has no edges of its own)."""
+    normals = np.zeros((3, 2))
+    reach = np.zeros(3)
+    axes = np.empty((3, 2))
+    for i in range(3):
+        axes[i, 0] = r[i] * size[i] / 2
+        axes[i, 1] = r[3 + i] * size[i] / 2
+    count = 0
+    for i in range(3):
+        length = np.hypot(axes[i, 0], axes[i, 1])
+        if length <= 1e-12:
+            continue
+        nx, ny = -axes[i, 1] / length, axes[i, 0] / length
+        normals[count, 0], normals[count, 1] = nx, ny
+        for j in range(3):
+            reach[count] += abs(nx * axes[j, 0] + ny * axes[j, 1])
+        count += 1
+    return normals, reach, count
+
+
+@njit
+def footprint_normals(
+    points: NDArray[np.float64],
+    shapes: NDArray[np.int64],
+    sizes: NDArray[np.float64],
+    positions: NDArray[np.float64],
+    rotations: NDArray[np.float64],
+    near: float,
+) -> NDArray[np.float64]:
+    """The table-plane normal of the nearest object's side at each point: the normal
+    of the box shadow's edge nearest the point, or the radial direction of a sphere's
+    or an upright cylinder's disc (:func:`footprint_depths` says which object is
+    nearest and how deep the point lies).
+
+    Args:
+        points, shapes, sizes, positions, rotations: as :func:`footprint_depths`.
+        near: points farther outside every footprint than this, metres, get none.
+
+    Returns:
+        Unit normals, shape (N, 2), their sign arbitrary; zero where there is none:
+        a point farther than ``near`` from every object, at a disc's centre, or by a
+        leaning cylinder (whose shadow is a hull with no single side to follow).
+    """
+    owner, depth = footprint_depths(points, shapes, sizes, positions, rotations)
+    out = np.zeros((len(points), 2))
+    for k in range(len(points)):
+        o = owner[k]
+        if o < 0 or depth[k] < -near:
+            continue
+        r = rotations[o]
+        dx, dy = points[k, 0] - positions[o, 0], points[k, 1] - positions[o, 1]
+        if shapes[o] == 0:
+            normals, reach, count = _box_edges(r, sizes[o])
+            best, nearest = np.inf, -1
+            for i in range(count):
+                gap = reach[i] - abs(dx * normals[i, 0] + dy * normals[i, 1])
+                if gap < best:
+                    best, nearest = gap, i
+            if nearest >= 0:
+                out[k, 0], out[k, 1] = normals[nearest, 0], normals[nearest, 1]
+        elif shapes[o] == 1 or np.hypot(r[2], r[5]) * sizes[o, 1] < _UPRIGHT_LEAN:
+            length = np.hypot(dx, dy)
+            if length > 0.0:
+                out[k, 0], out[k, 1] = dx / length, dy / length
+    return out
 
 
 @njit

@@ -91,11 +91,15 @@ class TargetPaths(NamedTuple):
         step: its target's travel over the frame, metres, (n, 2).
         feed_forward: the target velocity's share the position term misses, m/s,
             (n, 2).
+        normal: the table-plane normal of the object side beside each target, (n,
+            2); a zero row has none. Along the side the law may be stiffer
+            (:attr:`DriveLaw.tangent_tau`).
     """
 
     start: NDArray[np.float64]
     step: NDArray[np.float64]
     feed_forward: NDArray[np.float64]
+    normal: NDArray[np.float64]
 
 
 class Stacks(NamedTuple):
@@ -155,6 +159,11 @@ class DriveLaw(NamedTuple):
             weight is cancelled).
         pull_max: the fastest a bottom particle is pulled down to its support, m/s:
             ``physics.substep_travel`` a sub-step.
+        tangent_tau: the law's Δt along an object's side, for a particle with a
+            normal (:attr:`TargetPaths.normal`), seconds: ``tau``, or shorter
+            (``physics.stiff_tangent``).
+        tangent_gain: h / ``tangent_tau``.
+        rate: 1 / the frame's duration, 1/s.
     """
 
     tau: float
@@ -163,6 +172,9 @@ class DriveLaw(NamedTuple):
     dv_max: float
     lift_dv: float
     pull_max: float
+    tangent_tau: float
+    tangent_gain: float
+    rate: float
 
 
 class ParticleDrive(NamedTuple):
@@ -199,6 +211,8 @@ class ParticleDrive(NamedTuple):
         physics: PhysicsConfig,
         top_press: float,
         control_dt: float | None = None,
+        normals: NDArray[np.float64] | None = None,
+        tangent_dt: float | None = None,
     ) -> ParticleDrive:
         """The law for a frame in which particles go from ``start`` to ``goal``
         (metres, (K·L, 2), stacks of ``layers`` bottom first), pressed by
@@ -206,11 +220,16 @@ class ParticleDrive(NamedTuple):
         object, in ``substeps`` sub-steps. ``control_dt`` is the law's Δt (default:
         ``physics.control_time``, or the sub-step if longer); a frame given more
         sub-steps than configured (:func:`frame_substeps`) keeps the configured
-        law's Δt, so it resolves the same law more finely."""
+        law's Δt, so it resolves the same law more finely. ``tangent_dt`` is the
+        law's Δt along an object's side (default: Δt) for the particles with a
+        ``normals`` row (K·L, 2; zero rows have none), the sub-step if longer."""
         h = frame_dt / substeps
         tau = max(physics.control_time, h) if control_dt is None else max(control_dt, h)
+        tangent_tau = tau if tangent_dt is None else min(max(tangent_dt, h), tau)
         mass = proxy.particle_mass
         step = goal - start
+        if normals is None or tangent_tau == tau:
+            normals = np.zeros_like(goal)
         return cls(
             targets=TargetPaths(
                 start,
@@ -219,6 +238,7 @@ class ParticleDrive(NamedTuple):
                 # moving target (the paper's law); with a longer Δt it would lag by
                 # u·Δt, so the target's velocity is fed forward by the share it misses.
                 (1.0 - h / tau) * step / frame_dt,
+                normals,
             ),
             stacks=Stacks.of(len(goal) // layers, layers, proxy.stack_spacing),
             law=DriveLaw(
@@ -228,6 +248,9 @@ class ParticleDrive(NamedTuple):
                 dv_max=physics.max_particle_force * h / mass,
                 lift_dv=physics.gravity * h,
                 pull_max=physics.substep_travel / h,
+                tangent_tau=tangent_tau,
+                tangent_gain=h / tangent_tau,
+                rate=1.0 / frame_dt,
             ),
             substeps=substeps,
             # Bullet adds g·h itself; the weight is cancelled and the press applied.
@@ -285,6 +308,7 @@ def drive_velocities(
     start: NDArray[np.float64],
     step: NDArray[np.float64],
     feed_forward: NDArray[np.float64],
+    normal: NDArray[np.float64],
     fraction: float,
     is_bottom: NDArray[np.bool_],
     bottom_of: NDArray[np.intp],
@@ -299,6 +323,9 @@ def drive_velocities(
     dv_max: float,
     lift_dv: float,
     pull_max: float,
+    tangent_tau: float,
+    tangent_gain: float,
+    rate: float,
 ) -> NDArray[np.float64]:
     """One sub-step of the law (module docstring) for every particle: the velocity
     to set, m/s, (n, 3), from the particles' states now, the frame's targets, stacks
@@ -308,14 +335,34 @@ def drive_velocities(
     n = len(position)
     new = velocity.copy()
     for i in range(n):
-        vx = feed_forward[i, 0] + (start[i, 0] + fraction * step[i, 0] - position[i, 0]) / tau
-        vy = feed_forward[i, 1] + (start[i, 1] + fraction * step[i, 1] - position[i, 1]) / tau
+        ex = start[i, 0] + fraction * step[i, 0] - position[i, 0]
+        ey = start[i, 1] + fraction * step[i, 1] - position[i, 1]
+        nx, ny = normal[i, 0], normal[i, 1]
+        if nx == 0.0 and ny == 0.0:
+            vx = feed_forward[i, 0] + ex / tau
+            vy = feed_forward[i, 1] + ey / tau
+        else:
+            # Across the side at Δt, along it at the tangent's Δt (each with its own
+            # feed forward): the squeeze keeps its stiffness, the drag does not lag.
+            en = ex * nx + ey * ny
+            un = (step[i, 0] * nx + step[i, 1] * ny) * rate
+            ux, uy = step[i, 0] * rate - un * nx, step[i, 1] * rate - un * ny
+            along = 1.0 - tangent_gain
+            across = (1.0 - gain) * un + en / tau
+            vx = across * nx + along * ux + (ex - en * nx) / tangent_tau
+            vy = across * ny + along * uy + (ey - en * ny) / tangent_tau
         speed = np.hypot(vx, vy)
         if speed > v_max:
             vx *= v_max / speed
             vy *= v_max / speed
         dvx = gain * (vx - velocity[i, 0])
         dvy = gain * (vy - velocity[i, 1])
+        if nx != 0.0 or ny != 0.0:
+            # The tangential part of the change at the tangent's gain.
+            dn = dvx * nx + dvy * ny
+            scale = tangent_gain / gain
+            dvx = dn * nx + scale * (dvx - dn * nx)
+            dvy = dn * ny + scale * (dvy - dn * ny)
         size = np.hypot(dvx, dvy)
         if size > dv_max:
             dvx *= dv_max / size

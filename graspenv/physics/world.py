@@ -45,7 +45,7 @@ import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
 
 from graspenv.config import SceneConfig
-from graspenv.geometry import footprint_depths
+from graspenv.geometry import footprint_depths, footprint_normals
 from graspenv.physics.bodies import EDGE_RADIUS, build_scene, place_objects
 from graspenv.physics.control import REST_TOLERANCE, ParticleDrive, SupportPlanes
 from graspenv.physics.pool import ParticlePool
@@ -662,6 +662,7 @@ class PhysicsWorld(Closeable):
             v[i] = pb.getBaseVelocity(bodies[i], client)[0]
         substeps = self._stepper.substeps_for(frame_dt, self.object_states, goal - start, v)
         h = frame_dt / substeps
+        tangent_dt, normals = self._tangent_law(frame_dt, goal)
         drive = ParticleDrive.for_frame(
             start,
             goal,
@@ -672,6 +673,8 @@ class PhysicsWorld(Closeable):
             self._particle_physics,
             top_press=self.scene.proxy.down_force,
             control_dt=self._control_dt(frame_dt),
+            normals=normals,
+            tangent_dt=tangent_dt,
         )
         angular = [(0.0, 0.0, w) for w in np.repeat(spin_z, layers).tolist()]
         self.pool.set_upper(flat, ~drive.is_bottom)
@@ -733,6 +736,27 @@ class PhysicsWorld(Closeable):
         self._stepper.run(
             frame_dt, substeps, lambda _: self.rigid_proxies.drive(handles, goals, h, tau)
         )
+
+    def _tangent_law(
+        self, frame_dt: float, goal: NDArray[np.float64]
+    ) -> tuple[float | None, NDArray[np.float64] | None]:
+        """The law's Δt along an object's side (``physics.stiff_tangent``) and the
+        side's normal beside each goal (zero rows: no object within two particle
+        radii), or (None, None) where the law is the same along and across: the
+        configured sub-step, where it is shorter than the law's Δt."""
+        substep = frame_dt / self.substeps
+        if not self.scene.physics.stiff_tangent or substep >= self._control_dt(frame_dt):
+            return None, None
+        states = self.object_states()
+        normals = footprint_normals(
+            np.ascontiguousarray(goal[:, :2]),
+            self._bodies.shape_codes,
+            self._bodies.sizes,
+            states.position,
+            states.rotation,
+            2.0 * self.pool.radius,
+        )
+        return substep, normals
 
     def _control_dt(self, frame_dt: float) -> float:
         """The control law's Δt for a frame of ``frame_dt`` seconds: the configured

@@ -11,10 +11,7 @@ import pytest
 
 from graspenv.physics import PhysicsWorld
 from graspenv.physics.control import ParticleDrive, SupportPlanes
-
-# The default scene's box: 6 × 6 × 3 cm, centred at the origin.
-BOX_HALF = 0.03
-BOX_HEIGHT = 0.03
+from tests.physics._helpers import BOX_HALF, BOX_HEIGHT, squeeze_and_turn
 
 
 def test_control_law_drives_a_free_particle_to_its_target(world: PhysicsWorld) -> None:
@@ -91,37 +88,9 @@ def test_bottom_particle_rides_on_top_and_drops_off_the_edge(world: PhysicsWorld
     assert end[0, 2] == pytest.approx(r, abs=3e-4)
 
 
-def _finger(centre: np.ndarray, angle: float, n: int = 14, radius: float = 0.0075) -> np.ndarray:
-    a = angle + 2 * math.pi * np.arange(n) / n
-    return centre + radius * np.column_stack([np.cos(a), np.sin(a)])
-
-
-def _smooth(s: float) -> float:
-    return 10 * s**3 - 15 * s**4 + 6 * s**5
-
-
 def test_squeeze_and_turn_with_ideal_targets_reaches_the_yaw(world: PhysicsWorld) -> None:
     """Two round fingertips squeeze the box 3 mm deep and turn 90° about it in 1.5 s."""
-    r = world.scene.proxy.particle_radius
-    start, squeeze = BOX_HALF + 0.0075 + 0.004, BOX_HALF + 0.0075 - 0.003
-    sides = (np.array([1.0, 0.0]), np.array([-1.0, 0.0]))
-    ids = world.pool.acquire(28)
-    pts = np.concatenate([_finger(s * start, 0.0) for s in sides])
-    world.pool.place(ids, np.column_stack([pts, np.full(28, r)]))
-
-    def targets(d: float, theta: float) -> np.ndarray:
-        rot = np.array([[math.cos(theta), -math.sin(theta)], [math.sin(theta), math.cos(theta)]])
-        return np.concatenate([_finger(rot @ (s * d), theta) for s in sides])
-
-    for f in range(1, 16):
-        world.step_frame(ids, targets(start + (squeeze - start) * _smooth(f / 15), 0.0))
-    theta = 0.0
-    for f in range(1, 106):
-        new = math.pi / 2 * _smooth(min(f / 90, 1.0))
-        world.step_frame(ids, targets(squeeze, new), spin=(new - theta) / world.frame_dt)
-        theta = new
-    position, q = world.object_pose("box")
-    yaw = math.degrees(math.atan2(2 * (q[3] * q[2] + q[0] * q[1]), 1 - 2 * (q[1] ** 2 + q[2] ** 2)))
+    yaw, position = squeeze_and_turn(world)
     assert yaw == pytest.approx(90.0, abs=1.0)
     assert np.hypot(position[0], position[1]) < 0.002
     assert position[2] == pytest.approx(BOX_HEIGHT / 2, abs=1e-3)

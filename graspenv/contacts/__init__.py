@@ -12,6 +12,7 @@ Typical use, one camera frame at a time::
 
 from __future__ import annotations
 
+from graspenv.contacts.cleanup import MaskCleaner
 from graspenv.contacts.extract import Component, find_components, outline_from_chain, validate_mask
 from graspenv.contacts.matching import (
     Correspondence,
@@ -33,6 +34,7 @@ __all__ = [
     "ContactStatus",
     "ContactTracker",
     "Correspondence",
+    "MaskCleaner",
     "agreement",
     "correspond",
     "correspond_batch",

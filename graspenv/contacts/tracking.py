@@ -56,8 +56,6 @@ ascending id.
 
 from __future__ import annotations
 
-import math
-from collections import deque
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from typing import Literal, NamedTuple, TypeVar
@@ -67,6 +65,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.config import ContactConfig
+from graspenv.contacts.cleanup import MaskCleaner
 from graspenv.contacts.extract import components, traced_chains, validate_mask
 from graspenv.contacts.resample import gather, orient_ccw_kernel, resample_kernel
 from graspenv.geometry import Polylines, reach_from
@@ -277,14 +276,6 @@ class ContactFrame:
         return len(self.contact_ids)
 
 
-#: A component of a frame's mask of which the vote (``contacts.vote_frames``) keeps
-#: less than this share is taken as it is. The vote keeps a still fingertip under a
-#: pixel of edge jitter nearly whole, and a round one moving a quarter of its width
-#: a frame about two thirds (it lags a frame); from about two fifths of its width a
-#: frame it would keep less than half, cut into slivers or erased.
-VOTE_KEEPS = 0.5
-
-
 class ContactTracker:
     """Turns a stream of contact masks into tracked contacts.
 
@@ -299,20 +290,7 @@ class ContactTracker:
         self._spacing = self.config.contour_spacing()
         self._pixel_area = float(np.prod(surface.pixel_size))
         self._min_area = float(self.config.min_area_pixels(self._pixel_area))
-        close = self.config.close_px
-        self._close = (
-            cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (close, close)) if close > 1 else None
-        )
-        fill = self.config.fill_px
-        self._fill = (
-            cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * fill + 1, 2 * fill + 1))
-            if fill > 0
-            else None
-        )
-        self._last_seen: NDArray[np.uint8] | None = None
-        # The last vote_frames masks as they came, for the vote (oldest first).
-        self._recent: deque[NDArray[np.uint8]] = deque(maxlen=self.config.vote_frames)
-        self._cleans = self.config.vote_frames > 1 or close > 1 or fill > 0
+        self._cleaner = MaskCleaner(self.config, self._min_area)
         # Pixels to world (Surface.pixel_to_world): x = (c + 0.5)·sx − w/2,
         # y = h/2 − (r + 0.5)·sy.
         sx, sy = surface.pixel_size
@@ -328,79 +306,12 @@ class ContactTracker:
         self._next_id = 0
         self._index = 0
 
-    def _clean(self, image: NDArray[np.uint8]) -> NDArray[np.uint8]:
-        """The mask voted on over the last frames (``vote_frames``), closed
-        (``close_px``) and its dropouts filled (``fill_px``)."""
-        clean: NDArray[np.uint8] = np.minimum(image, 1)  # any non-zero is touched
-        if self.config.vote_frames > 1:
-            clean = self._voted(clean)
-        if self._close is not None:
-            clean = np.asarray(cv2.morphologyEx(clean, cv2.MORPH_CLOSE, self._close), np.uint8)
-        if self._fill is not None:
-            # Fill this frame's dropouts from the last frame's mask, but only within
-            # fill_px of what is touched now (a lifted finger is not kept), specks
-            # aside: a flipped pixel beside a lifted finger would keep a piece of it.
-            seen = clean
-            if self._last_seen is not None:
-                near = np.asarray(cv2.dilate(self._without_specks(clean), self._fill), np.uint8)
-                clean = clean | (self._last_seen & near)
-            self._last_seen = seen
-        return clean
-
-    def _without_specks(self, touched: NDArray[np.uint8]) -> NDArray[np.uint8]:
-        """``touched`` (0 or 1) without its components of fewer than ``min_area``
-        pixels."""
-        if self._min_area <= 1.0:
-            return touched
-        _, labels, stats, _ = cv2.connectedComponentsWithStats(touched, connectivity=8)
-        kept = stats[:, cv2.CC_STAT_AREA] >= self._min_area
-        kept[0] = False  # the background
-        return np.asarray(kept[labels], np.uint8)
-
-    def _voted(self, touched: NDArray[np.uint8]) -> NDArray[np.uint8]:
-        """Each pixel touched in most of the last ``vote_frames`` masks (``touched``
-        the newest, 0 or 1), but for the components of ``touched`` of at least
-        ``min_area`` of which the vote keeps less than :data:`VOTE_KEEPS`: a finger
-        that just touched down, or one that moved more than about two fifths of its
-        width since the last frame, which the vote would erase or cut into slivers.
-        Each of those is taken as it is, and the voted pixels where it was (within
-        twice its width, in no part of a contact the vote keeps) are dropped."""
-        recent = self._recent
-        recent.append(touched)
-        if len(recent) == 1:
-            return touched
-        votes = np.sum(recent, axis=0, dtype=np.uint8)
-        voted = votes > len(recent) // 2
-        count, labels = cv2.connectedComponents(touched, connectivity=8)
-        kept = np.bincount(labels[voted], minlength=count)
-        area = np.bincount(labels.ravel(), minlength=count)
-        # Specks are left to the vote: taken as they are, a flipped pixel beside a
-        # finger that lifted would drop that finger's last voted frame alone.
-        moved = (kept < VOTE_KEEPS * area) & (area >= self._min_area)
-        moved[0] = False  # the background is not a component
-        if not moved.any():
-            return np.asarray(voted, np.uint8)
-        as_seen = moved[labels]
-        reach = 2 * round(2.0 * math.sqrt(float(area[moved].max()))) + 1
-        trail = cv2.dilate(
-            as_seen.astype(np.uint8), cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (reach, reach))
-        )
-        parts, where = cv2.connectedComponents(np.asarray(voted, np.uint8), connectivity=8)
-        steady = np.zeros(parts, bool)
-        steady[where[voted & (labels > 0) & ~as_seen]] = True
-        left = np.zeros(parts, bool)
-        left[where[voted & (trail != 0)]] = True
-        left &= ~steady
-        left[0] = False
-        return np.asarray(voted & ~left[where] | as_seen, np.uint8)
-
     def reset(self) -> None:
         """Forget all contacts; ids and the frame index start again from 0."""
         self._previous = ContactFrame.empty()
         self._next_id = 0
         self._index = 0
-        self._last_seen = None
-        self._recent.clear()
+        self._cleaner.reset()
 
     def update(self, mask: object) -> ContactFrame:
         """Track the contacts of the next camera frame.
@@ -417,8 +328,8 @@ class ContactTracker:
                 surface's shape.
         """
         image = validate_mask(mask, self.surface.shape)
-        if self._cleans:
-            image = self._clean(image)
+        if self._cleaner.needed:
+            image = self._cleaner(image)
         before = self._previous
         if cv2.countNonZero(image) == 0:  # a fifth of tracing an empty frame's borders
             return self._advance(ContactFrame.empty(self._index, before.ids))

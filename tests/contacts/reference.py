@@ -331,3 +331,77 @@ def _inside(points: NDArray[np.float64], polygon: NDArray[np.float64]) -> NDArra
     rise = np.where(straddles, yj - yi, 1.0)
     crossing = xi + (y - yi) * (xj - xi) / rise
     return np.count_nonzero(straddles & (x < crossing), axis=1) % 2 == 1
+
+
+def clean_masks(
+    masks: Sequence[NDArray[np.uint8]],
+    vote_frames: int,
+    close_px: int,
+    fill_px: int,
+    min_area: float,
+) -> list[NDArray[np.uint8]]:
+    """:class:`graspenv.contacts.cleanup.MaskCleaner` over a stream of masks, bit for
+    bit: the form it had inside the tracker (2026-12-05), every step a whole-image
+    numpy operation (the vote a sum of the last masks, each component's counts a
+    ``bincount`` over the whole image)."""
+    import math
+    from collections import deque
+
+    import cv2
+
+    keeps = 0.5  # graspenv.contacts.cleanup.VOTE_KEEPS
+    close = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (max(close_px, 1),) * 2)
+    fill = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * fill_px + 1,) * 2)
+    recent: deque[NDArray[np.uint8]] = deque(maxlen=vote_frames)
+    last_seen: NDArray[np.uint8] | None = None
+
+    def without_specks(touched: NDArray[np.uint8]) -> NDArray[np.uint8]:
+        if min_area <= 1.0:
+            return touched
+        _, labels, stats, _ = cv2.connectedComponentsWithStats(touched, connectivity=8)
+        kept = stats[:, cv2.CC_STAT_AREA] >= min_area
+        kept[0] = False
+        return np.asarray(kept[labels], np.uint8)
+
+    def voted_mask(touched: NDArray[np.uint8]) -> NDArray[np.uint8]:
+        recent.append(touched)
+        if len(recent) == 1:
+            return touched
+        votes = np.sum(recent, axis=0, dtype=np.uint8)
+        voted = votes > len(recent) // 2
+        count, labels = cv2.connectedComponents(touched, connectivity=8)
+        kept = np.bincount(labels[voted], minlength=count)
+        area = np.bincount(labels.ravel(), minlength=count)
+        moved = (kept < keeps * area) & (area >= min_area)
+        moved[0] = False
+        if not moved.any():
+            return np.asarray(voted, np.uint8)
+        as_seen = moved[labels]
+        reach = 2 * round(2.0 * math.sqrt(float(area[moved].max()))) + 1
+        trail = cv2.dilate(
+            as_seen.astype(np.uint8), cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (reach, reach))
+        )
+        parts, where = cv2.connectedComponents(np.asarray(voted, np.uint8), connectivity=8)
+        steady = np.zeros(parts, bool)
+        steady[where[voted & (labels > 0) & ~as_seen]] = True
+        left = np.zeros(parts, bool)
+        left[where[voted & (trail != 0)]] = True
+        left &= ~steady
+        left[0] = False
+        return np.asarray(voted & ~left[where] | as_seen, np.uint8)
+
+    out = []
+    for image in masks:
+        clean = np.minimum(image, 1)
+        if vote_frames > 1:
+            clean = voted_mask(clean)
+        if close_px > 1:
+            clean = np.asarray(cv2.morphologyEx(clean, cv2.MORPH_CLOSE, close), np.uint8)
+        if fill_px > 0:
+            seen = clean
+            if last_seen is not None:
+                near = np.asarray(cv2.dilate(without_specks(clean), fill), np.uint8)
+                clean = clean | (last_seen & near)
+            last_seen = seen
+        out.append(clean)
+    return out

@@ -201,3 +201,53 @@ def test_direct_exhaustive_search_matches_the_blocked_product() -> None:
         for c, (p, q) in enumerate(zip(previous, current, strict=True)):
             expected = matching.match_exhaustive(p, q, window) + q_bounds[c]
             np.testing.assert_array_equal(match.successor[p_bounds[c] : p_bounds[c + 1]], expected)
+
+
+def _noisy_stream(rng: np.random.Generator, frames: int) -> list[np.ndarray]:
+    """Fingertips that touch down, move (some faster than their width a frame) and
+    lift, under salt, dropouts and holes: what the vote and the fill act on."""
+    rows, columns = 120, 160
+    fingers = [
+        (rng.uniform(10, 150), rng.uniform(10, 110), rng.uniform(-12, 12), rng.uniform(-12, 12))
+        for _ in range(int(rng.integers(1, 5)))
+    ]
+    spans = [sorted(rng.integers(0, frames, 2).tolist()) for _ in fingers]
+    stream = []
+    for f in range(frames):
+        mask = np.zeros((rows, columns), np.uint8)
+        for (x, y, vx, vy), (down, up) in zip(fingers, spans, strict=True):
+            if down <= f <= up:
+                centre = (int(x + vx * (f - down)) % columns, int(y + vy * (f - down)) % rows)
+                cv2.circle(mask, centre, int(rng.integers(4, 9)), 255, -1)
+        mask[rng.random(mask.shape) < 0.01] = 255  # salt
+        mask[rng.random(mask.shape) < 0.02] = 0  # dropouts and holes
+        stream.append(mask)
+    return stream
+
+
+@pytest.mark.parametrize(
+    ("vote", "close", "fill", "min_area"),
+    [
+        (3, 0, 0, 4.0),
+        (5, 0, 0, 4.0),
+        (3, 5, 2, 4.0),
+        (5, 5, 2, 9.0),
+        (1, 5, 2, 4.0),
+        (3, 0, 2, 1.0),
+    ],
+)
+def test_the_mask_clean_ups_match_their_whole_image_form(
+    vote: int, close: int, fill: int, min_area: float
+) -> None:
+    from graspenv.contacts.cleanup import MaskCleaner
+
+    rng = np.random.default_rng(100 * vote + 10 * close + fill)
+    config = ContactConfig(vote_frames=vote, close_px=close, fill_px=fill)
+    for _ in range(6):
+        stream = _noisy_stream(rng, 30)
+        cleaner = MaskCleaner(config, min_area)
+        expected = reference.clean_masks(stream, vote, close, fill, min_area)
+        for mask, want in zip(stream, expected, strict=True):
+            np.testing.assert_array_equal(cleaner(mask), want)
+        cleaner.reset()
+        np.testing.assert_array_equal(cleaner(stream[0]), expected[0])

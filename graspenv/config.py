@@ -447,7 +447,9 @@ class PhysicsConfig:
             resolve the same law more finely instead of stiffening it; the law uses
             the sub-step instead when that is longer (the law is unstable otherwise).
         stiff_tangent: an experiment, off in every preset: along an object's side
-            (a particle within two radii of one) the law's Δt is the configured
+            (for a particle whose target lies inside a footprint or within two
+            radii of one, the side of that footprint nearest it: on a box's top
+            too, where it is the nearest edge's) the law's Δt is the configured
             sub-step where that is shorter than ``control_time`` (at eight
             sub-steps, four times as stiff), across it ``control_time``, so the
             squeeze keeps its force while the grip gives less under a load along

@@ -143,10 +143,14 @@ class MaskCleaner:
         self._votes = None
         self._last_seen = None
 
-    def __call__(self, image: Mask) -> Mask:
+    def __call__(self, image: NDArray[np.bool_] | Mask) -> Mask:
         """The mask voted on over the last frames (``vote_frames``), closed
-        (``close_px``) and its dropouts filled (``fill_px``), 0 or 1."""
-        clean: Mask = np.asarray(cv2.threshold(image, 0, 1, cv2.THRESH_BINARY)[1], np.uint8)
+        (``close_px``) and its dropouts filled (``fill_px``), 0 or 1: a new array,
+        which the caller may change. ``image`` (2-D, bool or uint8, non-zero =
+        touched, as :func:`~graspenv.contacts.extract.validate_mask` gives it) is not
+        changed."""
+        touched: Mask = image.view(np.uint8)  # a bool mask's bytes are 0 or 1
+        clean: Mask = np.asarray(cv2.threshold(touched, 0, 1, cv2.THRESH_BINARY)[1], np.uint8)
         if self.config.vote_frames > 1:
             clean = self._voted(clean)
         if self._close is not None:
@@ -161,7 +165,7 @@ class MaskCleaner:
                 clean = np.asarray(
                     cv2.bitwise_or(clean, cv2.bitwise_and(self._last_seen, near)), np.uint8
                 )
-            self._last_seen = seen
+            self._last_seen = seen.copy() if seen is clean else seen
         return clean
 
     def _without_specks(self, touched: Mask) -> Mask:
@@ -199,7 +203,7 @@ class MaskCleaner:
         twice its width, in no part of a contact the vote keeps) are dropped."""
         seen = self._count_votes(touched)
         if seen == 1:
-            return touched
+            return touched.copy()  # the vote keeps touched itself
         assert self._votes is not None
         voted: Mask = np.asarray(
             cv2.threshold(self._votes, seen // 2, 1, cv2.THRESH_BINARY)[1], np.uint8

@@ -9,8 +9,10 @@ target's velocity fed forward::
     F  = m (v* − v) / Δt                  (|F| ≤ physics.max_particle_force)
 
 in the table plane, with h the sub-step and Δt = ``physics.control_time`` (or h if
-longer). At Δt = h this is the paper's law; for Δt > h the feed forward keeps a free
-particle on a moving target instead of lagging by u·Δt. A particle held off its point
+longer; ``physics.stiff_tangent``, an experiment, gives the part along an object's
+side a shorter Δt of its own, :attr:`DriveLaw.tangent_tau`). At Δt = h this is the
+paper's law; for Δt > h the feed forward keeps a free particle on a moving target
+instead of lagging by u·Δt. A particle held off its point
 by a depth d (inside an object) pushes with about m·d/Δt² (1152 N/m at the defaults:
 squeezing deeper grips harder). A bottom particle sliding on the table stays short of
 its point by its table friction over that stiffness (about 0.09 mm at the defaults).
@@ -230,6 +232,8 @@ class ParticleDrive(NamedTuple):
         step = goal - start
         if normals is None or tangent_tau == tau:
             normals = np.zeros_like(goal)
+        elif normals.shape != goal.shape:
+            raise ValueError(f"normals must have shape {goal.shape}, got {normals.shape}")
         return cls(
             targets=TargetPaths(
                 start,

@@ -741,9 +741,10 @@ class PhysicsWorld(Closeable):
         self, frame_dt: float, goal: NDArray[np.float64]
     ) -> tuple[float | None, NDArray[np.float64] | None]:
         """The law's Δt along an object's side (``physics.stiff_tangent``) and the
-        side's normal beside each goal (zero rows: no object within two particle
-        radii), or (None, None) where the law is the same along and across: the
-        configured sub-step, where it is shorter than the law's Δt."""
+        normal of the footprint side nearest each goal (inside a footprint, or
+        within two particle radii outside one; zero rows elsewhere), or (None,
+        None) where the law is the same along and across: the configured sub-step,
+        where it is shorter than the law's Δt."""
         substep = frame_dt / self.substeps
         if not self.scene.physics.stiff_tangent or substep >= self._control_dt(frame_dt):
             return None, None

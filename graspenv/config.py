@@ -457,8 +457,10 @@ class PhysicsConfig:
             No change at four sub-steps or fewer. At ``reference`` it took the
             canonical turn from 0.13° to 0.09° and slipped 21 of the grid's 25
             cylinders within 5 % of Coulomb instead of 14, but slipped the 3 cm
-            cylinders 23–75 % short (why is not known) and the noisy turn grew
-            (README, "Speed against error").
+            cylinders 23–75 % short (their contacts, held where they touched a
+            side curved within a fingertip's width, used most of their friction
+            before any push) and the noisy turn grew (README, "Speed against
+            error").
         pool_batch: particle bodies created at start and at each growth of the pool.
     """
 

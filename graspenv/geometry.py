@@ -229,11 +229,9 @@ def footprint_depths(
         if shapes[o] == 0:
             normals, reach, count = _box_edges(r, sizes[o])
             for k in range(n):
-                dx, dy = points[k, 0] - cx, points[k, 1] - cy
-                value = np.inf
-                for i in range(count):
-                    value = min(value, reach[i] - abs(dx * normals[i, 0] + dy * normals[i, 1]))
-                depth[k] = value
+                depth[k] = _nearest_edge(
+                    normals, reach, count, points[k, 0] - cx, points[k, 1] - cy
+                )[0]
         elif shapes[o] == 1 or np.hypot(r[2], r[5]) * sizes[o, 1] < _UPRIGHT_LEAN:
             radius = sizes[o, 0]
             for k in range(n):
@@ -274,6 +272,20 @@ def _box_edges(
 
 
 @njit
+def _nearest_edge(
+    normals: NDArray[np.float64], reach: NDArray[np.float64], count: int, dx: float, dy: float
+) -> tuple[float, int]:
+    """How deep a point (``dx``, ``dy`` from the centre) lies inside a box's shadow
+    (:func:`_box_edges`), and which edge pair is the nearest (-1 with none)."""
+    depth, nearest = np.inf, -1
+    for i in range(count):
+        gap = reach[i] - abs(dx * normals[i, 0] + dy * normals[i, 1])
+        if gap < depth:
+            depth, nearest = gap, i
+    return depth, nearest
+
+
+@njit
 def footprint_normals(
     points: NDArray[np.float64],
     shapes: NDArray[np.int64],
@@ -306,11 +318,7 @@ def footprint_normals(
         dx, dy = points[k, 0] - positions[o, 0], points[k, 1] - positions[o, 1]
         if shapes[o] == 0:
             normals, reach, count = _box_edges(r, sizes[o])
-            best, nearest = np.inf, -1
-            for i in range(count):
-                gap = reach[i] - abs(dx * normals[i, 0] + dy * normals[i, 1])
-                if gap < best:
-                    best, nearest = gap, i
+            nearest = _nearest_edge(normals, reach, count, dx, dy)[1]
             if nearest >= 0:
                 out[k, 0], out[k, 1] = normals[nearest, 0], normals[nearest, 1]
         elif shapes[o] == 1 or np.hypot(r[2], r[5]) * sizes[o, 1] < _UPRIGHT_LEAN:

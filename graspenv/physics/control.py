@@ -338,11 +338,14 @@ def drive_velocities(
     sub-step ends."""
     n = len(position)
     new = velocity.copy()
+    # The tangential part of a particle's velocity change at the tangent's gain.
+    tangent_scale = tangent_gain / gain
     for i in range(n):
         ex = start[i, 0] + fraction * step[i, 0] - position[i, 0]
         ey = start[i, 1] + fraction * step[i, 1] - position[i, 1]
         nx, ny = normal[i, 0], normal[i, 1]
-        if nx == 0.0 and ny == 0.0:
+        on_side = nx != 0.0 or ny != 0.0
+        if not on_side:
             vx = feed_forward[i, 0] + ex / tau
             vy = feed_forward[i, 1] + ey / tau
         else:
@@ -361,12 +364,10 @@ def drive_velocities(
             vy *= v_max / speed
         dvx = gain * (vx - velocity[i, 0])
         dvy = gain * (vy - velocity[i, 1])
-        if nx != 0.0 or ny != 0.0:
-            # The tangential part of the change at the tangent's gain.
+        if on_side:
             dn = dvx * nx + dvy * ny
-            scale = tangent_gain / gain
-            dvx = dn * nx + scale * (dvx - dn * nx)
-            dvy = dn * ny + scale * (dvy - dn * ny)
+            dvx = dn * nx + tangent_scale * (dvx - dn * nx)
+            dvy = dn * ny + tangent_scale * (dvy - dn * ny)
         size = np.hypot(dvx, dvy)
         if size > dv_max:
             dvx *= dv_max / size

@@ -662,7 +662,8 @@ class PhysicsWorld(Closeable):
             v[i] = pb.getBaseVelocity(bodies[i], client)[0]
         substeps = self._stepper.substeps_for(frame_dt, self.object_states, goal - start, v)
         h = frame_dt / substeps
-        tangent_dt, normals = self._tangent_law(frame_dt, goal)
+        control_dt = self._control_dt(frame_dt)
+        tangent_dt, normals = self._tangent_law(frame_dt, control_dt, goal)
         drive = ParticleDrive.for_frame(
             start,
             goal,
@@ -672,7 +673,7 @@ class PhysicsWorld(Closeable):
             self._particle_proxy,
             self._particle_physics,
             top_press=self.scene.proxy.down_force,
-            control_dt=self._control_dt(frame_dt),
+            control_dt=control_dt,
             normals=normals,
             tangent_dt=tangent_dt,
         )
@@ -738,7 +739,7 @@ class PhysicsWorld(Closeable):
         )
 
     def _tangent_law(
-        self, frame_dt: float, goal: NDArray[np.float64]
+        self, frame_dt: float, control_dt: float, goal: NDArray[np.float64]
     ) -> tuple[float | None, NDArray[np.float64] | None]:
         """The law's Δt along an object's side (``physics.stiff_tangent``) and the
         normal of the footprint side nearest each goal (inside a footprint, or
@@ -746,7 +747,7 @@ class PhysicsWorld(Closeable):
         None) where the law is the same along and across: the configured sub-step,
         where it is shorter than the law's Δt."""
         substep = frame_dt / self.substeps
-        if not self.scene.physics.stiff_tangent or substep >= self._control_dt(frame_dt):
+        if not self.scene.physics.stiff_tangent or substep >= control_dt:
             return None, None
         states = self.object_states()
         normals = footprint_normals(

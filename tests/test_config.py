@@ -13,6 +13,16 @@ def test_default_file_matches_built_in_default() -> None:
     assert load_config(CONFIGS / "default.toml") == load_config(None) == SceneConfig()
 
 
+def test_coarse_file_is_the_benchs_coarse_setting() -> None:
+    """envs_configs/coarse.toml (the fast preset until 2026-12-06) and the bench's
+    ``coarse`` setting are one setting."""
+    from graspenv.bench.frontier import COARSE, SETTINGS
+
+    coarse = load_config(CONFIGS / "coarse.toml")
+    assert coarse == load_config(None).replace(**COARSE) == load_config(None, **SETTINGS["coarse"])
+    assert coarse != load_config(None)
+
+
 def test_the_default_scene_file_loads() -> None:
     assert isinstance(load_config(CONFIGS / "default.toml"), SceneConfig)
 

@@ -285,16 +285,9 @@ def test_particles_by_contact_and_particle_velocities(method: str) -> None:
 def test_make_simulation_takes_the_environments_presets() -> None:
     """fidelity= merges a preset over the scene; explicit overrides win over it."""
     with graspenv.make_simulation(fidelity="fast") as sim:
-        assert sim.config.physics.substeps == FIDELITY_PRESETS["fast"]["physics"]["substeps"]
-        assert sim.config.contacts.spacing == FIDELITY_PRESETS["fast"]["contacts"]["spacing"]
-        # fast keeps the maximal-coordinate objects it was measured with (README,
-        # "Speed against error"); the default's are reduced-coordinate bodies.
-        physics = sim.config.physics
-        assert (physics.reduced_objects, physics.contact_erp) == (False, 0.08)
-        assert physics.max_particle_force == 5.0
-        assert physics.solver_iterations == 50
-        assert physics.max_substeps == 16  # the cap its speed was measured with
-    assert load_config(None).physics.reduced_objects
+        # fast is the default's model without CCD (README, "Speed against error").
+        assert sim.config == load_config(None, physics={"ccd": False})
+    assert load_config(None).physics.ccd
     with graspenv.make_simulation(fidelity="reference", physics={"substeps": 3}) as sim:
         assert sim.config.physics.substeps == 3
         assert sim.config.physics.solver_iterations == 300
@@ -307,7 +300,7 @@ def test_make_simulation_takes_the_environments_presets() -> None:
     # auto picks the cheapest preset within the budget (PRESET_DRIFT_MM).
     budget = PRESET_DRIFT_MM["fast"] + 1.0
     with graspenv.make_simulation(fidelity="auto", error_budget=budget) as sim:
-        assert sim.config.physics.substeps == FIDELITY_PRESETS["fast"]["physics"]["substeps"]
+        assert sim.config.physics.ccd is FIDELITY_PRESETS["fast"]["physics"]["ccd"] is False
     with pytest.raises(ValueError, match="fidelity must be one of"):
         graspenv.make_simulation(fidelity="best")
     with pytest.raises(ValueError, match="needs error_budget"):

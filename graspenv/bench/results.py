@@ -215,7 +215,7 @@ def _abs_error(result: Result, key: str) -> float:
 
 
 #: Settings the Pareto plot names even off the front.
-PRESET_LABELS = ("default", "reference", "preset:fast")
+PRESET_LABELS = ("default", "reference", "preset:fast", "coarse")
 
 
 def pareto_png(results: Sequence[Result], path: Path) -> Path:

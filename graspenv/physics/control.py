@@ -378,7 +378,9 @@ def drive_velocities(
     upper = 0
     for i in range(n):
         if is_bottom[i]:
-            new[i, 2] += press_dv[bottom]
+            # A fall (off an edge its support was measured on) carries no more than
+            # the pull's speed from one sub-step to the next.
+            new[i, 2] = max(new[i, 2], -pull_max) + press_dv[bottom]
             # A bottom particle that rose above its support is pulled back; the
             # support followed along its slope from where the frame measured it.
             support = (

@@ -12,9 +12,9 @@ from pathlib import Path
 import cv2
 import pytest
 
-from graspenv.bench.frontier import SETTINGS, run_bench
+from graspenv.bench.frontier import SETTINGS, measure, run_bench
 from graspenv.bench.results import read_csv, write_outputs
-from graspenv.bench.scenarios import SCENARIOS, slip, turn
+from graspenv.bench.scenarios import SCENARIOS, placement_offsets, slip, turn
 from graspenv.config import SceneConfig, load_config
 from graspenv.plots import pareto_front
 
@@ -107,6 +107,24 @@ def test_shipped_preset_errors_are_measured() -> None:
     assert list(PRESET_DRIFT_MM) == list(FIDELITY_PRESETS)
     assert all(math.isfinite(v) and v >= 0 for v in PRESET_DRIFT_MM.values())
     assert PRESET_DRIFT_MM["reference"] == 0.0
+
+
+@pytest.mark.parametrize(
+    ("scenario", "error"),
+    [("turn", "yaw_error_deg"), ("slide", "travel_error_mm"), ("slip", "slip_error_pct")],
+)
+def test_fast_is_within_twice_the_default(base: SceneConfig, scenario: str, error: str) -> None:
+    """Issue 13's target for the fast preset, over the bench's three placements: the
+    mean |error| against ground truth at most twice the default's."""
+    from graspenv.config import FIDELITY_PRESETS
+
+    offsets = placement_offsets(3, base)
+    at = {
+        name: measure(name, scenario, base.replace(**overrides), None, offsets)[0]
+        for name, overrides in (("default", {}), ("fast", FIDELITY_PRESETS["fast"]))
+    }
+    default, fast = (at[name].errors[f"abs_{error}"] for name in ("default", "fast"))
+    assert math.isfinite(fast) and fast <= 2.0 * default, (fast, default)
 
 
 def test_env_takes_auto_fidelity_with_a_budget(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -18,7 +18,12 @@ def test_speed_report_covers_every_part_and_writes_its_files(tmp_path: Path) -> 
         with_scaling=False,
     )  # fmt: skip
     report.scaling = speed.scaling(frames=2, counts=(1, 10, 100))
-    assert [s.name for s in report.scenes] == ["turn, default", "turn, fast", "two hands, default"]
+    assert [s.name for s in report.scenes] == [
+        "turn, default",
+        "turn, fast",
+        "turn, coarse",
+        "two hands, default",
+    ]
     for scene in report.scenes:
         assert scene.frames > 100 and scene.realtime > 0 and 0 < scene.bullet_share < 1
         assert set(scene.stage_minima) == {"sensing", "matching", "control", "physics"}

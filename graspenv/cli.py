@@ -205,7 +205,7 @@ def _bench(args: argparse.Namespace) -> int:
     if args.fuzz is not None:
         from graspenv.bench.fuzz import run_fuzz
 
-        fuzzed = run_fuzz(args.fuzz, args.seed, args.workers, say)
+        fuzzed = run_fuzz(args.fuzz, args.seed, args.workers, say, preset=args.preset)
         print(fuzzed.text())
         print(f"wrote {fuzzed.write(Path(args.out) / 'fuzz.csv')}")
         return 1 if fuzzed.failures else 0
@@ -328,7 +328,7 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--preset",
         default="default",
-        help="--grid, --noise: the fidelity preset they run at (fast, default, reference)",
+        help="--grid, --noise, --fuzz: the fidelity preset they run at (fast, default, reference)",
     )
     p.add_argument("--runs", type=int, default=3, help="--speed: whole runs of each scene")
     p.add_argument(

@@ -614,9 +614,10 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 #: error"), with the sub-steps that follow the motion (``physics.substep_travel``);
 #: the worst scenario is the flick for ``fast`` and the two-hand carry for
 #: ``default`` (measured 2026-12-06, ``graspenv bench --replays 1``). ``fast`` drifts
-#: less than the default: without CCD the grip is as near the reference, and every
-#: figure here is within a tenth of a millimetre (the old ``fast``, now
-#: envs_configs/coarse.toml, drifted 17.7 mm on the flick).
+#: no more than the default: both are within a tenth of a millimetre of the
+#: reference in every scenario, so ``auto`` picks ``fast`` for any budget of 0.053 mm
+#: or more (the old ``fast``, now envs_configs/coarse.toml, drifted 17.7 mm on the
+#: flick).
 PRESET_DRIFT_MM: dict[str, float] = {"fast": 0.053, "default": 0.079, "reference": 0.0}
 
 

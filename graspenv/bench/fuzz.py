@@ -17,12 +17,14 @@ Each episode is drawn from its own seed, so any one can be played again alone
 
 The invariants are :mod:`graspenv.bench.invariants`' (finite state, objects above
 the table and not tunnelling, particles out of objects, object speeds within the
-bound the fingers allow), at the default settings.
+bound the fingers allow), at the default settings or at a fidelity preset
+(``--preset``).
 """
 
 from __future__ import annotations
 
 import csv
+import functools
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -33,7 +35,14 @@ import numpy as np
 
 from graspenv.bench.invariants import InvariantChecker, Tolerances, hand_speed
 from graspenv.bench.jobs import run_jobs
-from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
+from graspenv.config import (
+    FIDELITY_PRESETS,
+    ObjectConfig,
+    SceneConfig,
+    load_config,
+    resolve_fidelity,
+    to_dict,
+)
 from graspenv.simulation import Simulation
 from graspenv.surface import Fingertip, Hand, SensorNoise, render_mask
 
@@ -219,13 +228,15 @@ class Outcome:
     deepest_mm: float = -math.inf
 
 
-def play(seed: int) -> Outcome:
-    """Play a seed's episode through the whole pipeline, checking every frame."""
+def play(seed: int, preset: str = "default") -> Outcome:
+    """Play a seed's episode through the whole pipeline at a fidelity ``preset``
+    (:data:`~graspenv.config.FIDELITY_PRESETS`), checking every frame."""
     tic = time.perf_counter()
     ep = episode(seed)
     hands = ep.hands()
     rng = np.random.default_rng(seed)
-    with Simulation(ep.scene) as sim:
+    scene = ep.scene.replace(**FIDELITY_PRESETS[resolve_fidelity(preset)])
+    with Simulation(scene) as sim:
         checker = InvariantChecker(sim, hand_speed(hands))
         empty = np.zeros(sim.surface.shape, np.uint8)
         for hand in hands + [None] * EMPTY_FRAMES:
@@ -316,11 +327,13 @@ def run_fuzz(
     first_seed: int = 0,
     workers: int = 1,
     progress: Callable[[str], None] | None = None,
+    preset: str = "default",
 ) -> FuzzReport:
     """Play episodes ``first_seed`` .. ``first_seed + count - 1`` (in ``workers``
-    processes), reporting progress every 2 % of the run."""
+    processes) at a fidelity ``preset``, reporting progress every 2 % of the run."""
     if count < 1 or workers < 1:
         raise ValueError(f"count and workers must be at least 1, got {count} and {workers}")
+    resolve_fidelity(preset)  # a bad name fails here, not in a worker
     tic = time.perf_counter()
     outcomes: list[Outcome] = []
     step = max(1, count // 50)
@@ -333,5 +346,6 @@ def run_fuzz(
             rate = done / (time.perf_counter() - tic)
             progress(f"[{done}/{count}] {bad} broke an invariant; {rate:.1f} episodes/s")
 
-    run_jobs(play, range(first_seed, first_seed + count), workers, note, chunksize=8)
+    seeds = range(first_seed, first_seed + count)
+    run_jobs(functools.partial(play, preset=preset), seeds, workers, note, chunksize=8)
     return FuzzReport(outcomes, time.perf_counter() - tic)

@@ -29,7 +29,10 @@ The surface is measured by rays once a frame, where the particle starts it, and
 followed along its slope as the particle moves (:class:`SupportPlanes`); the pull
 is no faster than ``physics.substep_travel`` a sub-step. Without either, a particle
 climbing a ball's shoulder, or put down on a steeply tilted face, was yanked into
-the surface by the stale height (docs/design.md, section 3b). A particle in layer
+the surface by the stale height (docs/design.md, section 3b). A fall (a particle
+pressed off the edge its support was measured on) carries no more than that speed
+from one sub-step to the next, the press's own change added on top, so that a
+particle resting on its support presses as before. A particle in layer
 l > 0 of a stack is driven the same way to ``proxy.stack_spacing · l`` above its
 bottom particle.
 

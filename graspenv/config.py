@@ -394,7 +394,8 @@ class PhysicsConfig:
             1.8 let a particle 1.03 mm into it in a frame at the cap); at 32 none
             did, before the particles of heavy objects were made heavier (then one
             did, in a frame of 7 sub-steps, until ``substep_travel`` became 0.25 mm).
-            Slow frames never reach it; ``fast`` keeps 16.
+            Slow frames never reach it; the coarse setting
+            (envs_configs/coarse.toml, the old ``fast``) keeps 16.
         substep_travel: the farthest an object's point or a particle may move in one
             physics step, metres: a frame whose fastest point would move further
             gets as many more steps as that needs, up to ``max_substeps``. Bullet's
@@ -420,7 +421,9 @@ class PhysicsConfig:
             the fingertip) still slipped 10-13 % short of Coulomb's force, at 20 N
             within 2 % (README, "Accuracy across the grasp space").
         max_particle_speed: clamp on each particle's commanded speed, m/s.
-        ccd: continuous collision detection for particles (swept sphere).
+        ccd: continuous collision detection for particles (swept sphere): the
+            guard against hard strikes (tests/stability). Off in ``fast``, where it
+            costs half the default's frame (README, "Speed against error").
         allowed_ccd_penetration: Bullet's allowed CCD penetration, metres.
         contact_breaking_threshold: how far from an object or the table a particle's
             contacts form, metres: within it the solver stops a particle before it
@@ -435,7 +438,8 @@ class PhysicsConfig:
             centre of mass spin about the grip's normal (a 3 cm box held 2 mm up slips
             at 3 % of Coulomb's force); in reduced coordinates it holds, but the
             contacts are softer (hence ``contact_erp`` 0.4) and need the shorter
-            ``substep_travel`` (docs/design.md, section 3b). Off in ``fast``.
+            ``substep_travel`` (docs/design.md, section 3b). Off in the coarse
+            setting (envs_configs/coarse.toml).
         contact_erp: the share of a contact's penetration Bullet corrects in one
             step (its ``contactERP``; PyBullet's own default is 0.08). It sets how
             far a squeezing particle sinks into an object; reduced-coordinate
@@ -624,6 +628,11 @@ PRESET_DRIFT_MM: dict[str, float] = {"fast": 0.053, "default": 0.079, "reference
 def choose_fidelity(error_budget_mm: float) -> str:
     """The cheapest preset whose measured drift (:data:`PRESET_DRIFT_MM`) is within
     ``error_budget_mm``; ``reference`` when none is.
+
+    ``fast`` drifts no more than the default (both within the placements' spread of
+    the reference), so a budget of its drift or more gives ``fast``, which has no
+    CCD (the guard against hard strikes), and a smaller one gives ``reference``:
+    the default is chosen by name only.
 
     Raises:
         ValueError: the budget is not a positive number.

@@ -255,10 +255,11 @@ def play(seed: int, preset: str = "default") -> Outcome:
 
 @dataclass
 class FuzzReport:
-    """Every episode's outcome and the run's wall time."""
+    """Every episode's outcome, the run's wall time and the preset it ran at."""
 
     outcomes: list[Outcome]
     seconds: float
+    preset: str = "default"
 
     @property
     def failures(self) -> list[Outcome]:
@@ -270,7 +271,7 @@ class FuzzReport:
             for name in outcome.broken:
                 counts[name] = counts.get(name, 0) + 1
         lines = [
-            f"{len(self.outcomes)} episodes in {self.seconds:.0f} s: "
+            f"{len(self.outcomes)} episodes at the {self.preset} preset in {self.seconds:.0f} s: "
             f"{len(self.failures)} broke an invariant"
             + (
                 " (" + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())) + ")"
@@ -348,4 +349,4 @@ def run_fuzz(
 
     seeds = range(first_seed, first_seed + count)
     run_jobs(functools.partial(play, preset=preset), seeds, workers, note, chunksize=8)
-    return FuzzReport(outcomes, time.perf_counter() - tic)
+    return FuzzReport(outcomes, time.perf_counter() - tic, preset)

@@ -29,10 +29,10 @@ The surface is measured by rays once a frame, where the particle starts it, and
 followed along its slope as the particle moves (:class:`SupportPlanes`); the pull
 is no faster than ``physics.substep_travel`` a sub-step. Without either, a particle
 climbing a ball's shoulder, or put down on a steeply tilted face, was yanked into
-the surface by the stale height (docs/design.md, section 3b). A fall (a particle
-pressed off the edge its support was measured on) carries no more than that speed
-from one sub-step to the next, the press's own change added on top, so that a
-particle resting on its support presses as before. A particle in layer
+the surface by the stale height (docs/design.md, section 3b). A bottom particle's
+downward speed carried from one sub-step to the next (a fall off the edge its
+support was measured on) is no more than that, the press's own change added on
+top, so that a particle resting on its support presses as before. A particle in layer
 l > 0 of a stack is driven the same way to ``proxy.stack_spacing · l`` above its
 bottom particle.
 
@@ -381,8 +381,8 @@ def drive_velocities(
     upper = 0
     for i in range(n):
         if is_bottom[i]:
-            # A fall (off an edge its support was measured on) carries no more than
-            # the pull's speed from one sub-step to the next.
+            # Downward speed carried into this sub-step (a fall off the edge its
+            # support was measured on) is no more than the pull's; the press adds on.
             new[i, 2] = max(new[i, 2], -pull_max) + press_dv[bottom]
             # A bottom particle that rose above its support is pulled back; the
             # support followed along its slope from where the frame measured it.

@@ -159,6 +159,10 @@ def test_the_named_fast_fuzz_cases_keep_their_record(seed: int) -> None:
     assert fuzz.play(seed, preset="fast").broken == FAST_RECORD[seed]
 
 
-def test_fuzz_refuses_an_unknown_preset() -> None:
+def test_fuzz_refuses_an_unknown_preset_before_it_plays(monkeypatch: pytest.MonkeyPatch) -> None:
+    def play(seed: int, preset: str = "default") -> fuzz.Outcome:
+        raise AssertionError("played an episode")
+
+    monkeypatch.setattr(fuzz, "play", play)
     with pytest.raises(ValueError, match="fidelity must be one of"):
         fuzz.run_fuzz(1, preset="fastest")

@@ -199,6 +199,31 @@ def test_a_particle_far_above_its_support_is_pulled_down_a_sub_step_travel_at_mo
     assert -pull(0.02) == pytest.approx(travel / h)
 
 
+def test_a_falling_particle_carries_at_most_the_pull_speed_and_the_press_adds_on() -> None:
+    """Pressed off the edge its support was measured on, a particle falls below that
+    support: its downward speed carried into the next sub-step is capped at
+    ``physics.substep_travel`` a sub-step, the press added on top; one resting on its
+    support (at rest, or rising) keeps its velocity and gets the press alone."""
+    from graspenv.config import PhysicsConfig
+
+    drive, r, h = _one_bottom_particle()
+    pull_max = PhysicsConfig().substep_travel / h
+    rest = SupportPlanes(np.array([0.03 + r]), np.zeros((1, 2)), np.zeros((1, 2)))
+    press = drive.presses(rest.rest_z)
+    below = np.array([[0.0, 0.0, 0.02 + r]])  # 10 mm under the stale support
+
+    def vz(speed: float, position: np.ndarray = below) -> float:
+        v = drive.velocities(1, position, np.array([[0.0, 0.0, speed]]), rest, press)
+        return float(v[0, 2])
+
+    assert vz(-1.0) == pytest.approx(-pull_max + press[0])
+    assert vz(-0.5 * pull_max) == pytest.approx(-0.5 * pull_max + press[0])
+    assert vz(0.0) == pytest.approx(press[0])
+    assert vz(0.1) == pytest.approx(0.1 + press[0])
+    on_support = np.array([[0.0, 0.0, 0.03 + r]])
+    assert vz(0.0, on_support) == pytest.approx(press[0])
+
+
 def test_the_support_is_followed_along_its_slope() -> None:
     drive, r, _ = _one_bottom_particle()
     # A face rising 1 in 2 along +x, measured under the particle at x = 0.

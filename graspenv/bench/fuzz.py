@@ -307,12 +307,13 @@ class FuzzReport:
         with path.open("w", newline="") as f:
             writer = csv.writer(f)
             writer.writerow(
-                ["seed", "broken", "first_violation", "episode", "seconds", "deepest_mm"]
+                ["seed", "preset", "broken", "first_violation", "episode", "seconds", "deepest_mm"]
             )
             for o in self.outcomes:
                 writer.writerow(
                     [
                         o.seed,
+                        self.preset,
                         " ".join(o.broken),
                         o.first,
                         o.description,

@@ -66,7 +66,8 @@ def test_the_report_gives_the_overlap_tail(tmp_path: Path) -> None:
     assert "median 0.502 mm, 99th percentile 0.991, 99.9th 1.000, max 1.001" in tail
     assert "502 past half of it" in tail
     lines = report.write(tmp_path / "fuzz.csv").read_text().splitlines()
-    assert lines[0].endswith(",deepest_mm") and lines[3].endswith(",0.0033")
+    assert lines[0].startswith("seed,preset,") and lines[0].endswith(",deepest_mm")
+    assert lines[3].startswith("3,default,") and lines[3].endswith(",0.0033")
     assert lines[-1].endswith(",")  # the episode with nothing to overlap: an empty cell
     assert "no particle touched" in fuzz.FuzzReport(outcomes[-1:], 1.0).overlap_tail()
 

@@ -34,6 +34,7 @@ __all__ = [
     "ProxyConfig",
     "SceneConfig",
     "SurfaceConfig",
+    "at_fidelity",
     "build_section",
     "choose_fidelity",
     "load_config",
@@ -663,6 +664,19 @@ def resolve_fidelity(fidelity: str, error_budget: float | None = None) -> str:
     if fidelity not in FIDELITY_PRESETS:
         raise ValueError(f"fidelity must be one of {[*FIDELITY_PRESETS, 'auto']}, got {fidelity!r}")
     return fidelity
+
+
+def at_fidelity(
+    scene: SceneConfig, fidelity: str = "default", error_budget: float | None = None
+) -> SceneConfig:
+    """``scene`` with the preset ``fidelity`` names (:func:`resolve_fidelity`) merged
+    over it; ``scene`` itself at the default.
+
+    Raises:
+        ValueError: as :func:`resolve_fidelity`.
+    """
+    preset = FIDELITY_PRESETS[resolve_fidelity(fidelity, error_budget)]
+    return scene.replace(**preset) if preset else scene
 
 
 def to_dict(config: Any) -> Any:

@@ -232,7 +232,7 @@ def footprint_depths(
                 depth[k] = _nearest_edge(
                     normals, reach, count, points[k, 0] - cx, points[k, 1] - cy
                 )[0]
-        elif shapes[o] == 1 or np.hypot(r[2], r[5]) * sizes[o, 1] < _UPRIGHT_LEAN:
+        elif _is_disc(shapes[o], r, sizes[o]):
             radius = sizes[o, 0]
             for k in range(n):
                 depth[k] = radius - np.hypot(points[k, 0] - cx, points[k, 1] - cy)
@@ -243,6 +243,13 @@ def footprint_depths(
                 best[k] = depth[k]
                 owner[k] = o
     return owner, best
+
+
+@njit
+def _is_disc(shape: int, r: NDArray[np.float64], size: NDArray[np.float64]) -> bool:
+    """Whether an object's footprint is a disc: a sphere's, or an upright (or nearly
+    upright, :data:`_UPRIGHT_LEAN`) cylinder's; not a box (code 0)."""
+    return shape == 1 or (shape != 0 and np.hypot(r[2], r[5]) * size[1] < _UPRIGHT_LEAN)
 
 
 @njit
@@ -310,21 +317,26 @@ def footprint_normals(
     """
     owner, depth = footprint_depths(points, shapes, sizes, positions, rotations)
     out = np.zeros((len(points), 2))
-    for k in range(len(points)):
-        o = owner[k]
-        if o < 0 or depth[k] < -near:
-            continue
+    for o in range(len(shapes)):
         r = rotations[o]
-        dx, dy = points[k, 0] - positions[o, 0], points[k, 1] - positions[o, 1]
-        if shapes[o] == 0:
-            normals, reach, count = _box_edges(r, sizes[o])
-            nearest = _nearest_edge(normals, reach, count, dx, dy)[1]
-            if nearest >= 0:
-                out[k, 0], out[k, 1] = normals[nearest, 0], normals[nearest, 1]
-        elif shapes[o] == 1 or np.hypot(r[2], r[5]) * sizes[o, 1] < _UPRIGHT_LEAN:
-            length = np.hypot(dx, dy)
-            if length > 0.0:
-                out[k, 0], out[k, 1] = dx / length, dy / length
+        is_box = shapes[o] == 0
+        if not is_box and not _is_disc(shapes[o], r, sizes[o]):
+            continue  # a leaning cylinder
+        normals, reach, count = (
+            _box_edges(r, sizes[o]) if is_box else (np.zeros((3, 2)), np.zeros(3), 0)
+        )
+        for k in range(len(points)):
+            if owner[k] != o or depth[k] < -near:
+                continue
+            dx, dy = points[k, 0] - positions[o, 0], points[k, 1] - positions[o, 1]
+            if is_box:
+                nearest = _nearest_edge(normals, reach, count, dx, dy)[1]
+                if nearest >= 0:
+                    out[k, 0], out[k, 1] = normals[nearest, 0], normals[nearest, 1]
+            else:
+                length = np.hypot(dx, dy)
+                if length > 0.0:
+                    out[k, 0], out[k, 1] = dx / length, dy / length
     return out
 
 

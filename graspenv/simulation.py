@@ -16,7 +16,7 @@ from typing import Any, Unpack
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from graspenv.config import FIDELITY_PRESETS, SceneConfig, load_config, resolve_fidelity
+from graspenv.config import SceneConfig, at_fidelity, load_config
 from graspenv.contacts.extract import validate_mask
 from graspenv.contacts.tracking import ContactFrame, ContactTracker
 from graspenv.physics.world import ContactReport, ObjectStateChange, PhysicsWorld
@@ -323,8 +323,5 @@ def make_simulation(
         ConfigError: unknown keys or bad values, naming the key and the file.
         ValueError: an unknown fidelity, or ``"auto"`` without a budget.
     """
-    preset = FIDELITY_PRESETS[resolve_fidelity(fidelity, error_budget)]
-    scene = load_config(config)
-    if preset:
-        scene = scene.replace(**preset)
+    scene = at_fidelity(load_config(config), fidelity, error_budget)
     return Simulation(scene.replace(**overrides) if overrides else scene)

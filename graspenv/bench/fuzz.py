@@ -36,9 +36,9 @@ import numpy as np
 from graspenv.bench.invariants import InvariantChecker, Tolerances, hand_speed
 from graspenv.bench.jobs import run_jobs
 from graspenv.config import (
-    FIDELITY_PRESETS,
     ObjectConfig,
     SceneConfig,
+    at_fidelity,
     load_config,
     resolve_fidelity,
     to_dict,
@@ -235,8 +235,7 @@ def play(seed: int, preset: str = "default") -> Outcome:
     ep = episode(seed)
     hands = ep.hands()
     rng = np.random.default_rng(seed)
-    scene = ep.scene.replace(**FIDELITY_PRESETS[resolve_fidelity(preset)])
-    with Simulation(scene) as sim:
+    with Simulation(at_fidelity(ep.scene, preset)) as sim:
         checker = InvariantChecker(sim, hand_speed(hands))
         empty = np.zeros(sim.surface.shape, np.uint8)
         for hand in hands + [None] * EMPTY_FRAMES:

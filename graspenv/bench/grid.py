@@ -61,13 +61,7 @@ from graspenv.bench.jobs import collect_jobs
 from graspenv.bench.playback import Played, play
 from graspenv.bench.results import pipe_table, write_rows
 from graspenv.bench.scenarios import push_until_slip
-from graspenv.config import (
-    FIDELITY_PRESETS,
-    ObjectConfig,
-    SceneConfig,
-    load_config,
-    resolve_fidelity,
-)
+from graspenv.config import ObjectConfig, SceneConfig, at_fidelity, load_config
 from graspenv.geometry import tilt_angle, yaw_of, yaw_step
 from graspenv.plots import HeatPanel, heat_maps, write_png
 from graspenv.simulation import Simulation
@@ -350,7 +344,7 @@ def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = ""
 
 def base_scene(config: str | None = None, preset: str = "default") -> SceneConfig:
     """The scene file (or the built-in default) with a fidelity preset applied."""
-    return load_config(config).replace(**FIDELITY_PRESETS[resolve_fidelity(preset)])
+    return at_fidelity(load_config(config), preset)
 
 
 def _measure(job: tuple[Cell, str, str | None, str]) -> CellResult:

@@ -77,6 +77,7 @@ __all__ = [
     "heat_map_png",
     "measure_cell",
     "run_grid",
+    "slip_run",
 ]
 
 TURN_TARGET_DEG = 1.0
@@ -328,8 +329,16 @@ def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = ""
     result.grip_normal_n = 0.5 * (turn_normal + slide_normal)
     result.max_tilt_deg = max(turn_tilt, slide_tilt)
 
+    result.slip_error_pct = slip_run(base, cell).errors["slip_error_pct"]
+    return result
+
+
+def slip_run(base: SceneConfig, cell: Cell) -> Played:
+    """Squeeze the cell's object, then push it across the grip, the push growing by
+    :data:`SLIP_RAMP` of Coulomb's prediction a second, until it slips
+    (:func:`~graspenv.bench.scenarios.push_until_slip`)."""
     # Pushed along the contacts' line: the particles' centres are a radius up.
-    slipped = push_until_slip(
+    return push_until_slip(
         base,
         cell.object(),
         cell.depth,
@@ -338,8 +347,6 @@ def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = ""
         height=base.proxy.particle_radius,
         finger_radius=cell.finger_radius,
     )
-    result.slip_error_pct = slipped.errors["slip_error_pct"]
-    return result
 
 
 def base_scene(config: str | None = None, preset: str = "default") -> SceneConfig:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import csv
 import math
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
@@ -70,6 +71,9 @@ def test_bench_writes_csv_table_and_pareto_plot(tmp_path: Path) -> None:
             before.errors["yaw_error_deg"], abs=5e-5
         )
     assert write_outputs(again, tmp_path / "again")[2].stat().st_size > 0
+    # Without the canonical turn there is no speed axis: the table, and no plot.
+    noisy = [replace(r, scenario="noisy") for r in again]
+    assert [p.name for p in write_outputs(noisy, tmp_path / "noisy")] == ["bench.csv", "bench.md"]
     (tmp_path / "other.csv").write_text("a,b\n1,2\n")
     with pytest.raises(ValueError, match=r"not a bench\.csv"):
         read_csv(tmp_path / "other.csv")

@@ -22,10 +22,10 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from graspenv.config import (
-    FIDELITY_PRESETS,
     ConfigError,
     SceneConfig,
     SurfaceConfig,
+    at_fidelity,
     build_section,
     read_config,
     resolve_fidelity,
@@ -186,10 +186,8 @@ class GraspEnv(gym.Env[Any, NDArray[np.float32]]):
         fidelity = resolve_fidelity(fidelity, error_budget)
         self.fidelity = fidelity
         scene, task_config, controller_config, reward_config = load_env_config(task_cls, config)
-        sections: dict[str, Any] = dict(FIDELITY_PRESETS[fidelity])
-        if proxy is not None:
-            sections["proxy"] = {"method": proxy}
-        self._base_scene = scene.replace(**sections) if sections else scene
+        scene = at_fidelity(scene, fidelity)
+        self._base_scene = scene if proxy is None else scene.replace(proxy={"method": proxy})
         self.task: Task = task if isinstance(task, Task) else task_cls(task_config, reward_config)
         self.obs_mode: ObsMode = obs_mode
         self.render_mode = render_mode

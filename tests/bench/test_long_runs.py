@@ -1,12 +1,16 @@
-"""The long runs, behind ``make slow`` and never in ``make test``: the README's soak
-and the first thousand episodes of the long fuzz (129 s together on two cores)."""
+"""The long runs, behind ``make slow`` and never in ``make test``: the README's soak,
+the first thousand episodes of the long fuzz (129 s together on two cores) and the
+presets' drift that ``fidelity="auto"`` chooses by."""
 
 from __future__ import annotations
 
 import pytest
 
 from graspenv.bench import fuzz
+from graspenv.bench.frontier import run_bench
+from graspenv.bench.scenarios import SCENARIOS
 from graspenv.bench.soak import soak
+from graspenv.config import PRESET_DRIFT_MM
 
 pytestmark = pytest.mark.slow
 
@@ -32,3 +36,14 @@ def test_a_thousand_fuzz_episodes_keep_their_record() -> None:
     report = fuzz.run_fuzz(1000, first_seed=0, workers=2)
     broken = {o.seed: o.broken for o in report.outcomes if o.broken}
     assert broken == LONG_KNOWN_BROKEN
+
+
+def test_the_presets_drift_as_recorded_for_auto() -> None:
+    """``PRESET_DRIFT_MM`` is each preset's worst drift against the reference over the
+    bench's scenarios at three placements, as ``graspenv bench`` measures it; a change
+    that moves a preset's final poses must record its new figure (and the README's)."""
+    settings = {"preset:fast": "fast", "default": "default", "reference": "reference"}
+    results = run_bench(list(settings), list(SCENARIOS), placements=3)
+    for setting, preset in settings.items():
+        worst = max(r.reference_drift_mm for r in results if r.setting == setting)
+        assert worst == pytest.approx(PRESET_DRIFT_MM[preset], abs=0.01), (setting, worst)

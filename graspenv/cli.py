@@ -234,6 +234,8 @@ def _bench(args: argparse.Namespace) -> int:
             address=args.address,
         )
     print(markdown_table(results))
+    if not any(r.scenario == "turn" for r in results):
+        print("no pareto.png: its speed axis is the canonical turn's (add --scenario turn)")
     return wrote(write_outputs(results, Path(args.out)))
 
 

@@ -178,8 +178,10 @@ def push_until_slip(
 
     Returns:
         The run, with errors ``slip_force_n``, ``coulomb_force_n``,
-        ``slip_error_pct``, ``creep_force_n``, ``grip_normal_n`` and
-        ``tilt_at_slip_deg``.
+        ``slip_error_pct``, ``creep_force_n``, ``grip_normal_n`` (settled),
+        ``tilt_at_slip_deg``, and ``slip_normal_n`` and ``slip_error_then_pct``:
+        the fingers' normal force over the five frames before the slip, and the
+        slip against Coulomb's force from it.
     """
     settle = 20
     script = pinch(
@@ -200,24 +202,26 @@ def push_until_slip(
     finger_mu = base.proxy.particle_friction * obj.friction
     table_mu = base.physics.table_friction * obj.friction
 
-    def predicted() -> float:
-        # Mean normal forces (newtons, the last sub-step of each frame) while settled;
-        # each finger presses with about half the total normal force.
-        normal, table = float(np.mean(state["normal"])), float(np.mean(state["table"]))
+    def predicted(normal: float | None = None) -> float:
+        # Mean normal forces (newtons, the last sub-step of each frame) while settled,
+        # or the fingers' ``normal`` given; each finger presses with about half.
+        normal = float(np.mean(state["normal"])) if normal is None else normal
+        table = float(np.mean(state["table"]))
         return coulomb_slip_force(normal / 2, finger_mu) + table_mu * table
 
     state: dict[str, Any] = {
-        "normal": [], "table": [], "start": None, "force": math.nan, "creep": math.nan,
-        "rate": rate,
+        "normal": [], "table": [], "pushed": [], "start": None, "force": math.nan,
+        "creep": math.nan, "rate": rate, "then": math.nan,
     }  # fmt: skip
 
     def each(sim: Simulation, index: int, played: Played) -> bool:
-        if hold_start <= index < ramp_start:
+        if hold_start <= index:
             report = sim.contact_report("box")
-            fingers = report.particle >= 0
-            table = (report.particle < 0) & (report.other_object < 0)
-            state["normal"].append(float(report.normal_force[fingers].sum()))
-            state["table"].append(float(report.normal_force[table].sum()))
+            fingers = report.normal_force[report.particle >= 0].sum()
+            if index < ramp_start:
+                table = (report.particle < 0) & (report.other_object < 0)
+                state["normal"].append(float(fingers))
+                state["table"].append(float(report.normal_force[table].sum()))
         if index + 1 >= ramp_start:
             states = sim.world.object_states()
             row = sim.world.object_index("box")
@@ -251,7 +255,11 @@ def push_until_slip(
             if speed > SLIP_SPEED:
                 state["force"] = force
                 state["tilt"] = math.degrees(tilt_angle(sim.object_pose("box")[1]))
+                # The grip's normal force over the frames before the slip (not the
+                # slip's own, whose contacts are breaking).
+                state["then"] = float(np.mean(state["pushed"][-5:] or [math.nan]))
                 return True
+            state["pushed"].append(float(fingers))
             push = state["rate"] * (index + 2 - ramp_start) * dt
             sim.apply_force("box", (0.0, push, 0.0), height)
         return False
@@ -264,6 +272,11 @@ def push_until_slip(
     played.errors["coulomb_force_n"] = coulomb
     played.errors["slip_error_pct"] = 100 * (state["force"] - coulomb) / coulomb
     played.errors["creep_force_n"] = state["creep"]
+    # Coulomb's law at the normal force the grip had just before the slip: the grip
+    # gives before it slips, and round a curved side that costs normal force.
+    then = predicted(state["then"])
+    played.errors["slip_normal_n"] = state["then"]
+    played.errors["slip_error_then_pct"] = 100 * (state["force"] - then) / then
     return played
 
 

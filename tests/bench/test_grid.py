@@ -6,6 +6,7 @@ canonical scene's pixels, must meet them, and the bookkeeping must be right."""
 
 from __future__ import annotations
 
+import csv
 import math
 from dataclasses import replace
 from pathlib import Path
@@ -103,6 +104,17 @@ def test_outputs_round_trip(tmp_path: Path, canonical: grid.CellResult) -> None:
     image = cv2.imread(str(tmp_path / "grid_boxes.png"))
     assert image is not None and image.shape[0] > 100
     assert "| boxes |" in (tmp_path / "grid.md").read_text()
+    assert again[0].slip_error_then_pct == pytest.approx(results[0].slip_error_then_pct)
+    # A grid.csv from before a column was added reads it as NaN.
+    old = tmp_path / "old.csv"
+    with (tmp_path / "grid.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    with old.open("w", newline="") as f:
+        columns = [c for c in rows[0] if c != "slip_error_then_pct"]
+        writer = csv.DictWriter(f, columns, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(rows)
+    assert math.isnan(grid.read_csv(old)[0].slip_error_then_pct)
 
 
 def test_a_cylinder_slips_when_no_contact_holds_not_when_its_arc_ends_slide(
@@ -117,3 +129,7 @@ def test_a_cylinder_slips_when_no_contact_holds_not_when_its_arc_ends_slide(
     slipped = grid.slip_run(base, cell).errors
     assert abs(slipped["slip_error_pct"]) <= grid.SLIP_TARGET_PCT, slipped
     assert slipped["creep_force_n"] <= slipped["slip_force_n"]
+    # The grip gave before it slipped and lost some normal force, never gained much.
+    assert (
+        0.8 * slipped["grip_normal_n"] < slipped["slip_normal_n"] < 1.05 * slipped["grip_normal_n"]
+    )

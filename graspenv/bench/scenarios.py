@@ -274,9 +274,11 @@ def push_until_slip(
     played.errors["creep_force_n"] = state["creep"]
     # Coulomb's law at the normal force the grip had just before the slip: the grip
     # gives before it slips, and round a curved side that costs normal force.
-    then = predicted(state["then"])
     played.errors["slip_normal_n"] = state["then"]
-    played.errors["slip_error_then_pct"] = 100 * (state["force"] - then) / then
+    played.errors["slip_error_then_pct"] = math.nan
+    if math.isfinite(state["then"]):  # no figure where no particle gripped it
+        then = predicted(state["then"])
+        played.errors["slip_error_then_pct"] = 100 * (state["force"] - then) / then
     return played
 
 

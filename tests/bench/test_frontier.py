@@ -35,6 +35,13 @@ def test_slip_force_matches_coulomb(base: SceneConfig) -> None:
     assert errors["tilt_at_slip_deg"] < 1.0  # it slid, it did not tip
 
 
+def test_a_grip_without_particles_gives_no_slip_figure(base: SceneConfig) -> None:
+    """Rigid proxies hold the box with no particle: the slip has no figure, and the
+    run says so with NaN rather than failing."""
+    errors = slip(base.replace(proxy={"method": "rigid"})).errors
+    assert math.isnan(errors["slip_error_pct"]) and math.isnan(errors["slip_error_then_pct"])
+
+
 def test_weaker_friction_slips_sooner(base: SceneConfig) -> None:
     """Half the particle friction: the grip gives way at a smaller force."""
     low = base.replace(proxy={"particle_friction": 1.0})

@@ -573,6 +573,29 @@ class PhysicsWorld(Closeable):
             points, self._bodies.shape_codes, self._bodies.sizes, states.position, states.rotation
         )
 
+    def footprint_normal(self, xy: ArrayLike, near: float) -> NDArray[np.float64]:
+        """The table-plane normal of the nearest object's side at each point (a box
+        shadow's nearest edge, a disc's radius), zero farther than ``near`` metres
+        outside every footprint (:func:`~graspenv.geometry.footprint_normals`).
+
+        Args:
+            xy: points, metres, world frame, shape (N, 2).
+            near: metres.
+
+        Returns:
+            Unit normals, their sign arbitrary, or zero rows, shape (N, 2).
+        """
+        points = np.ascontiguousarray(xy, dtype=float).reshape(-1, 2)
+        states = self.object_states()
+        return footprint_normals(
+            points,
+            self._bodies.shape_codes,
+            self._bodies.sizes,
+            states.position,
+            states.rotation,
+            near,
+        )
+
     def contact_report(self, name: str) -> ContactReport:
         """Contacts on an object from the last physics sub-step.
 
@@ -749,16 +772,7 @@ class PhysicsWorld(Closeable):
         substep = frame_dt / self.substeps
         if not self.scene.physics.stiff_tangent or substep >= control_dt:
             return None, None
-        states = self.object_states()
-        normals = footprint_normals(
-            np.ascontiguousarray(goal[:, :2]),
-            self._bodies.shape_codes,
-            self._bodies.sizes,
-            states.position,
-            states.rotation,
-            2.0 * self.pool.radius,
-        )
-        return substep, normals
+        return substep, self.footprint_normal(goal[:, :2], 2.0 * self.pool.radius)
 
     def _control_dt(self, frame_dt: float) -> float:
         """The control law's Δt for a frame of ``frame_dt`` seconds: the configured

@@ -40,7 +40,10 @@ real fingertip. One camera frame:
 6. *Penetration limit* (``proxy.penetration_limit``). A particle whose point lies
    deeper than ``proxy.penetration_margin`` inside an object's footprint while the
    particle is below the object's top is lifted onto the top face, instead of
-   pressing the side ever harder.
+   pressing the side ever harder. The depth is the point's from the footprint's
+   nearest side or, if deeper, from the side the particle is at: a finger sliding
+   into a box along an edge stays within the margin of that edge while its
+   particles, stopped at the face it entered by, would fall ever farther behind.
 
 With ``track_hand_rotation`` and ``predicted_resampling`` both off this is the
 paper's plain form: the raw previous contour matched against the tracker's contour
@@ -402,7 +405,21 @@ class PersistentProxies:
         depth: NDArray[np.float64],
     ) -> None:
         world = self._world
-        deep = np.flatnonzero((owner >= 0) & (depth > self._proxy.penetration_margin))
+        margin = self._proxy.penetration_margin
+        inside = owner >= 0
+        # A point may lie near a side other than the one its particle presses: a
+        # finger sliding into a box along an edge keeps its points within the margin
+        # of the edge's side while its particles, stopped at the face it entered by,
+        # fall ever farther behind (seed 2575 of the long fuzz, at `fast`). Measured
+        # from the side the particle is at, that point is deep too.
+        shallow = np.flatnonzero(inside & (depth <= margin))
+        if shallow.size:
+            at = world.pool.positions(particles[shallow, 0])[:, :2]
+            normal = world.footprint_normal(at, 2.0 * world.pool.radius)
+            behind = np.abs(np.einsum("ij,ij->i", at - targets[shallow], normal))
+            depth = depth.copy()
+            depth[shallow] = np.maximum(depth[shallow], behind - world.pool.radius)
+        deep = np.flatnonzero(inside & (depth > margin))
         if deep.size == 0:
             return
         bottom_ids = particles[deep, 0]

@@ -216,7 +216,8 @@ class CellResult:
     slide_error_pct: float = math.nan
     slip_error_pct: float = math.nan
     #: The slip against Coulomb's force from the normal force just before it (the
-    #: grip's give round a curved side costs normal force; the target is the above).
+    #: grip's give round a curved side costs normal force). Not a target:
+    #: ``slip_error_pct`` is.
     slip_error_then_pct: float = math.nan
     turn_margin: float = math.nan
     slide_margin: float = math.nan
@@ -451,7 +452,8 @@ def summary(results: Sequence[CellResult]) -> str:
         worst_slip = max((abs(r.slip_error_pct) for r in slips), default=math.nan)
         uncounted = sum(1 for r in rows if not (r.turn_counted and r.slide_counted))
         within = sum(abs(r.slip_error_pct) <= SLIP_TARGET_PCT for r in slips)
-        within_then = sum(abs(r.slip_error_then_pct) <= SLIP_TARGET_PCT for r in slips)
+        thens = [r for r in slips if math.isfinite(r.slip_error_then_pct)]
+        within_then = sum(abs(r.slip_error_then_pct) <= SLIP_TARGET_PCT for r in thens)
         table.append(
             (
                 name,
@@ -461,7 +463,7 @@ def summary(results: Sequence[CellResult]) -> str:
                 f"{worst_slide:.2f} %",
                 f"{within}/{len(rows)}",
                 f"{worst_slip:.1f} %",
-                f"{within_then}/{len(rows)}",
+                f"{within_then}/{len(rows)}" if thens else "–",  # an older grid.csv
                 uncounted,
             )
         )

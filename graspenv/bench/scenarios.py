@@ -210,7 +210,7 @@ def push_until_slip(
         return coulomb_slip_force(normal / 2, finger_mu) + table_mu * table
 
     state: dict[str, Any] = {
-        "normal": [], "table": [], "pushed": [], "start": None, "force": math.nan,
+        "normal": [], "table": [], "ramp_normal": [], "start": None, "force": math.nan,
         "creep": math.nan, "rate": rate, "then": math.nan,
     }  # fmt: skip
 
@@ -257,9 +257,9 @@ def push_until_slip(
                 state["tilt"] = math.degrees(tilt_angle(sim.object_pose("box")[1]))
                 # The grip's normal force over the frames before the slip (not the
                 # slip's own, whose contacts are breaking).
-                state["then"] = float(np.mean(state["pushed"][-5:] or [math.nan]))
+                state["then"] = float(np.mean(state["ramp_normal"][-5:]))
                 return True
-            state["pushed"].append(float(fingers))
+            state["ramp_normal"].append(float(fingers))
             push = state["rate"] * (index + 2 - ramp_start) * dt
             sim.apply_force("box", (0.0, push, 0.0), height)
         return False
@@ -276,7 +276,8 @@ def push_until_slip(
     # gives before it slips, and round a curved side that costs normal force.
     played.errors["slip_normal_n"] = state["then"]
     played.errors["slip_error_then_pct"] = math.nan
-    if math.isfinite(state["then"]):  # no figure where no particle gripped it
+    # No figure where no particle gripped it (rigid proxies) or it never slipped.
+    if math.isfinite(state["then"]):
         then = predicted(state["then"])
         played.errors["slip_error_then_pct"] = 100 * (state["force"] - then) / then
     return played

@@ -404,14 +404,27 @@ class PersistentProxies:
         owner: NDArray[np.int64],
         depth: NDArray[np.float64],
     ) -> None:
+        """Lift onto the top face each particle (stack) whose point lies deeper than
+        the margin inside an object's footprint while the particle is below the top
+        (step 6 of the module docstring).
+
+        Args:
+            particles: particle ids, (K, L) stacks, bottom first.
+            targets: the contour points, metres, world frame, (K, 2).
+            owner, depth: the object whose footprint holds each point deepest and that
+                depth from its nearest side, metres, negative outside; (K,) each
+                (:meth:`~graspenv.physics.world.PhysicsWorld.footprint_depth`).
+        """
         world = self._world
         margin = self._proxy.penetration_margin
-        inside = owner >= 0
+        inside = (owner >= 0) & (depth > 0.0)
         # A point may lie near a side other than the one its particle presses: a
         # finger sliding into a box along an edge keeps its points within the margin
         # of the edge's side while its particles, stopped at the face it entered by,
         # fall ever farther behind (seed 2575 of the long fuzz, at `fast`). Measured
-        # from the side the particle is at, that point is deep too.
+        # from the side the particle is at, that point is deep too. The side is the
+        # nearest footprint's side within two radii of the particle (none at a
+        # disc's centre or by a leaning cylinder: there only the nearest side counts).
         shallow = np.flatnonzero(inside & (depth <= margin))
         if shallow.size:
             at = world.pool.positions(particles[shallow, 0])[:, :2]

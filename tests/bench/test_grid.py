@@ -125,10 +125,13 @@ def test_a_cylinder_slips_when_no_contact_holds_not_when_its_arc_ends_slide(
     creeps with their give. Coulomb's limit is gross slip, when it slides from under
     all of them (measured against the grip's mean, this cell read 9 % short)."""
     cylinder = replace(grid.BASE_CELL, shape="cylinder", footprint=0.03, mass=0.1)
-    cell = next(c for c, _ in grid.grid_jobs(grid.MAPS) if replace(c, position=(0, 0)) == cylinder)
+    # The grid's own cell, at its seeded place on the table.
+    (cell,) = [c for c, _ in grid.grid_jobs(grid.MAPS) if replace(c, position=(0, 0)) == cylinder]
     slipped = grid.slip_run(base, cell).errors
     assert abs(slipped["slip_error_pct"]) <= grid.SLIP_TARGET_PCT, slipped
-    assert slipped["creep_force_n"] <= slipped["slip_force_n"]
+    # It crept before it slipped: the grip's mean moved half a millimetre first.
+    assert math.isfinite(slipped["creep_force_n"]), slipped
+    assert slipped["creep_force_n"] < slipped["slip_force_n"]
     # The grip gave before it slipped and lost some normal force, never gained much.
     assert (
         0.8 * slipped["grip_normal_n"] < slipped["slip_normal_n"] < 1.05 * slipped["grip_normal_n"]

@@ -1,8 +1,10 @@
-"""The long runs, behind ``make slow`` and never in ``make test``: the README's soak,
-the first thousand episodes of the long fuzz (129 s together on two cores) and the
-presets' drift that ``fidelity="auto"`` chooses by."""
+"""The long runs, behind ``make slow`` and never in ``make test``: the README's soak
+and the first thousand episodes of the long fuzz (129 s together on two cores), and
+the presets' drift that ``fidelity="auto"`` chooses by (90 s)."""
 
 from __future__ import annotations
+
+import math
 
 import pytest
 
@@ -42,8 +44,10 @@ def test_the_presets_drift_as_recorded_for_auto() -> None:
     """``PRESET_DRIFT_MM`` is each preset's worst drift against the reference over the
     bench's scenarios at three placements, as ``graspenv bench`` measures it; a change
     that moves a preset's final poses must record its new figure (and the README's)."""
-    settings = {"preset:fast": "fast", "default": "default", "reference": "reference"}
+    # The reference's own drift is 0 by definition; the slip has none (NaN).
+    settings = {"preset:fast": "fast", "default": "default"}
     results = run_bench(list(settings), list(SCENARIOS), placements=3)
     for setting, preset in settings.items():
-        worst = max(r.reference_drift_mm for r in results if r.setting == setting)
+        drifts = [r.reference_drift_mm for r in results if r.setting == setting]
+        worst = max(d for d in drifts if math.isfinite(d))
         assert worst == pytest.approx(PRESET_DRIFT_MM[preset], abs=0.01), (setting, worst)

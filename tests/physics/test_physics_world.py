@@ -71,6 +71,14 @@ def test_object_footprint_depth_margin_and_top(world: PhysicsWorld) -> None:
     assert shallow.depth[1] == pytest.approx(0.003, abs=1e-4)
 
 
+def test_footprint_normal_is_the_nearest_side_and_none_far_away(world: PhysicsWorld) -> None:
+    """The box (half side BOX_HALF, at the origin): a point just outside or inside a
+    face gets that face's normal; one farther out than ``near`` gets none."""
+    points = [[BOX_HALF + 0.002, 0.005], [0.004, -BOX_HALF + 0.001], [BOX_HALF + 0.01, 0.0]]
+    normal = world.footprint_normal(points, near=0.004)
+    np.testing.assert_allclose(np.abs(normal), [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]], atol=1e-9)
+
+
 def test_footprint_of_a_tilted_box_is_the_shadow_of_its_corners(world: PhysicsWorld) -> None:
     """The depth in a box's shadow, in any orientation, against the depth in the convex
     hull of its eight projected corners, computed here independently."""

@@ -416,8 +416,11 @@ class PersistentProxies:
                 (:meth:`~graspenv.physics.world.PhysicsWorld.footprint_depth`).
         """
         world = self._world
-        margin = self._proxy.penetration_margin
-        inside = (owner >= 0) & (depth > 0.0)
+        margin, radius = self._proxy.penetration_margin, world.pool.radius
+        inside = np.flatnonzero((owner >= 0) & (depth > 0.0))
+        if inside.size == 0:
+            return
+        at = world.pool.positions(particles[inside, 0])
         # A point may lie near a side other than the one its particle presses: a
         # finger sliding into a box along an edge keeps its points within the margin
         # of the edge's side while its particles, stopped at the face it entered by,
@@ -425,24 +428,17 @@ class PersistentProxies:
         # from the side the particle is at, that point is deep too. The side is the
         # nearest footprint's side within two radii of the particle (none at a
         # disc's centre or by a leaning cylinder: there only the nearest side counts).
-        shallow = np.flatnonzero(inside & (depth <= margin))
-        if shallow.size:
-            at = world.pool.positions(particles[shallow, 0])[:, :2]
-            normal = world.footprint_normal(at, 2.0 * world.pool.radius)
-            behind = np.abs(np.einsum("ij,ij->i", at - targets[shallow], normal))
-            depth = depth.copy()
-            depth[shallow] = np.maximum(depth[shallow], behind - world.pool.radius)
-        deep = np.flatnonzero(inside & (depth > margin))
-        if deep.size == 0:
+        normal = world.footprint_normal(at[:, :2], 2.0 * radius)
+        behind = np.abs(np.einsum("ij,ij->i", at[:, :2] - targets[inside], normal)) - radius
+        deep = (depth[inside] > margin) | (behind > margin)
+        if not np.any(deep):
             return
-        bottom_ids = particles[deep, 0]
-        z = world.pool.positions(bottom_ids)[:, 2]
-        top = world.ray_heights(targets[deep]).height + world.pool.radius
+        top = world.ray_heights(targets[inside[deep]]).height + radius
         # A particle already on the top face stays where the physics put it.
-        below = z < top - world.pool.radius
+        below = at[deep, 2] < top - radius
         if not np.any(below):
             return
-        rows = deep[below]
+        rows = inside[deep][below]
         world.pool.place(
             particles[rows].reshape(-1), self._stack_positions(targets[rows], top[below])
         )

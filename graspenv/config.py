@@ -295,7 +295,8 @@ class ProxyConfig:
             footprint on its top face.
         penetration_margin: how deep inside a footprint, metres, a contour point must
             be for the penetration limit to put its particle on the top face (from
-            the nearest side, or from the side its particle is at). Keep it
+            the nearest side, or, a particle radius deeper, from the side its
+            particle is at). Keep it
             about 1 mm above the deepest squeeze that should hold an object: 7 mm, for
             the grasp-space grid's deepest squeeze of 6 mm (at 5 mm the deepest points
             of a 6 mm squeeze went on top, unevenly on the two sides, and the box slid

@@ -169,6 +169,8 @@ def _bench(args: argparse.Namespace) -> int:
 
     if (args.noise_seeds or args.noise_level) and not (args.noise and args.from_csv is None):
         raise ValueError("--noise-seeds and --noise-level go with --noise (and not --from-csv)")
+    if args.sample is not None and not (args.grid and args.from_csv is None and args.sample > 0):
+        raise ValueError("--sample N goes with --grid (and not --from-csv), N at least 1")
     if args.speed:
         from graspenv.bench.speed import run_speed
 
@@ -193,6 +195,8 @@ def _bench(args: argparse.Namespace) -> int:
                 extra["seeds"] = list(dict.fromkeys(args.noise_seeds))
             if args.noise_level:
                 extra["levels"] = list(dict.fromkeys(args.noise_level))
+            if args.sample is not None:
+                extra.update(sample=args.sample, seed=args.seed)
             results = run(
                 config=args.config,
                 progress=say,
@@ -300,7 +304,20 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
         help="instead: N random hard episodes, the stability invariants checked on every "
         "frame (fuzz.csv); exit 1 if any broke",
     )
-    p.add_argument("--seed", type=int, default=0, help="--fuzz: the first episode's seed")
+    p.add_argument(
+        "--sample",
+        type=int,
+        default=None,
+        metavar="N",
+        help="--grid: instead of the maps, N grasps drawn at random from the whole grasp "
+        "space, every parameter at once (grid_sample.png)",
+    )
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="--fuzz: the first episode's seed; --grid --sample: the draw's",
+    )
     p.add_argument(
         "--noise-seeds",
         type=int,

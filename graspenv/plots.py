@@ -251,6 +251,39 @@ def pareto_chart(
     return _image(fig, path)
 
 
+def sorted_errors(
+    title: str,
+    panels: Sequence[tuple[str, Mapping[str, Sequence[float]], float]],
+    note: str = "",
+    size: tuple[int, int] = (1080, 380),
+) -> NDArray[np.uint8]:
+    """Side-by-side panels ``(title, {series: values}, target)``: each series' values
+    sorted and drawn against their share of the series (0 to 1), so that the share
+    beyond the target reads off the x axis; the target dashed at ±target, NaN left
+    out."""
+    plt = _pyplot()
+    fig, axes = plt.subplots(
+        1, len(panels), figsize=(size[0] / _DPI, size[1] / _DPI), dpi=_DPI, squeeze=False
+    )
+    for ax, (label, series, target) in zip(axes[0], panels, strict=True):
+        for name, values in series.items():
+            ys = np.sort(np.asarray(values, float)[np.isfinite(np.asarray(values, float))])
+            if ys.size:
+                xs = (np.arange(ys.size) + 0.5) / ys.size
+                ax.plot(
+                    xs, ys, marker="o", markersize=3, linewidth=1.0, label=f"{name} ({ys.size})"
+                )
+        for level in (-target, target):
+            ax.axhline(level, color="0.35", linestyle="--", linewidth=1.2)
+        ax.set(title=label, xlabel="share of the cells, sorted by error", xlim=(0.0, 1.0))
+        ax.legend(loc="upper left")
+    fig.suptitle(title, fontsize=11)
+    if note:
+        fig.text(0.5, 0.01, note, ha="center", va="bottom", fontsize=8, color=MUTED)
+    fig.tight_layout(rect=(0.0, 0.05 if note else 0.0, 1.0, 1.0))
+    return _image(fig, None)
+
+
 class HeatPanel:
     """One panel of :func:`heat_maps`: a table of values coloured by their size
     against a target.

@@ -44,6 +44,8 @@ def test_interactions_writes_a_table(tmp_path: Path, capsys: pytest.CaptureFixtu
         (["interactions", "--scenario", "juggle"], "unknown scenario 'juggle'"),
         (["demo", "--config", "missing.toml"], "missing.toml"),
         (["replay", "no/such/folder"], "no/such/folder"),
+        (["bench", "--sample", "5"], "--sample N goes with --grid"),
+        (["bench", "--grid", "--sample", "0"], "N at least 1"),
     ],
 )
 def test_bad_arguments_end_with_one_line(

@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from graspenv.plots import HeatPanel, heat_maps, line_chart, pareto_chart
+from graspenv.plots import HeatPanel, heat_maps, line_chart, pareto_chart, sorted_errors
 
 
 def test_heat_maps_colour_cells_by_their_error_over_the_target(tmp_path: Path) -> None:
@@ -46,3 +46,15 @@ def test_without_matplotlib_a_chart_names_the_extra(monkeypatch: pytest.MonkeyPa
     with pytest.raises(ModuleNotFoundError, match=r"graspenv\[plots\]") as raised:
         line_chart({"s": ([0, 1], [0.0, 1.0])}, None, "t", "x", "y")
     assert raised.value.name == "matplotlib"
+
+
+def test_sorted_errors_draw_each_panel_with_its_series() -> None:
+    panels = [
+        ("turn", {"boxes": [0.5, -0.2, np.nan], "cylinders": [1.5]}, 1.0),
+        ("slip", {"boxes": [], "cylinders": [-3.0, 7.0]}, 5.0),
+    ]
+    image = sorted_errors("title", panels, note="dashed: the target", size=(800, 300))
+    assert image.shape == (300, 800, 3)
+    # Something drawn in colour (the series), not a blank figure.
+    hsv = cv2.cvtColor(image, cv2.COLOR_BGR2HSV)
+    assert (hsv[:, :, 1] > 120).sum() > 100

@@ -9,6 +9,10 @@ canonical values (:data:`BASE_CELL`):
 - box height 1–8 cm against squeeze depth 1–6 mm;
 - object friction 0.3–1 against fingertip radius 5–12 mm.
 
+The maps miss the corners where several parameters are extreme together, so
+``graspenv bench --grid --sample N`` plays instead N cells drawn from the whole
+space at once (:func:`sampled`, :data:`SPACE`).
+
 Every cell sits at its own place on the table and its own sub-pixel phase (seeded),
 so no cell shares the canonical scene's pixel grid. Each cell plays three runs
 through the whole pipeline and measures them against ground truth, the ideal rigid
@@ -66,7 +70,7 @@ from graspenv.bench.results import pipe_table, write_rows
 from graspenv.bench.scenarios import push_until_slip
 from graspenv.config import ObjectConfig, SceneConfig, at_fidelity, load_config
 from graspenv.geometry import tilt_angle, yaw_of, yaw_step
-from graspenv.plots import HeatPanel, heat_maps, write_png
+from graspenv.plots import HeatPanel, heat_maps, sorted_errors, write_png
 from graspenv.simulation import Simulation
 from graspenv.surface.noise import SensorNoise
 
@@ -203,6 +207,42 @@ def placed(cells: Sequence[Cell], seed: int = 0) -> list[Cell]:
         y = float(rng.uniform(-0.12, 0.0))
         out.append(replace(cell, position=(x, y)))
     return out
+
+
+#: The grasp space the maps cut through: each parameter's range (the mass drawn on a
+#: log scale). :func:`sampled` draws from all of them at once.
+SPACE: dict[str, tuple[float, float]] = {
+    "footprint": (0.03, 0.12),
+    "height": (0.01, 0.08),
+    "mass": (0.005, 2.0),
+    "friction": (0.3, 1.0),
+    "depth": (0.001, 0.006),
+    "finger_radius": (0.005, 0.012),
+}
+#: The map name of :func:`sampled` cells.
+SAMPLE = "sample"
+
+
+def sampled(count: int, seed: int = 0) -> list[Cell]:
+    """``count`` cells drawn at random from the whole of :data:`SPACE`, every
+    parameter at once (the maps vary two at a time), half boxes and half upright
+    cylinders on average, each at its own place on the table (:func:`placed`)."""
+    if count < 1:
+        raise ValueError(f"a sample needs at least 1 cell, got {count}")
+    rng = np.random.default_rng(seed)
+    cells = []
+    for _ in range(count):
+        values: dict[str, Any] = {
+            name: float(
+                math.exp(rng.uniform(math.log(low), math.log(high)))
+                if name == "mass"
+                else rng.uniform(low, high)
+            )
+            for name, (low, high) in SPACE.items()
+        }
+        shape = "box" if rng.random() < 0.5 else "cylinder"
+        cells.append(replace(Cell(shape=shape), **values))
+    return placed(cells, seed + 1)
 
 
 @dataclass
@@ -384,13 +424,18 @@ def run_grid(
     workers: int = 1,
     seed: int = 0,
     preset: str = "default",
+    sample: int = 0,
 ) -> list[CellResult]:
     """Measure every cell of ``maps`` (in ``workers`` processes) on the scene file
-    ``config`` (or the built-in default) at a fidelity ``preset``."""
+    ``config`` (or the built-in default) at a fidelity ``preset``; with ``sample``,
+    that many cells drawn from the whole space instead (:func:`sampled`)."""
     if workers < 1:
         raise ValueError(f"workers must be at least 1, got {workers}")
+    if sample < 0:
+        raise ValueError(f"sample must be at least 0, got {sample}")
     base_scene(config, preset)  # a bad file or preset fails here, not in a worker
-    jobs = [(cell, name, config, preset) for cell, name in grid_jobs(maps, seed)]
+    chosen = [(c, SAMPLE) for c in sampled(sample, seed)] if sample else grid_jobs(maps, seed)
+    jobs = [(cell, name, config, preset) for cell, name in chosen]
     return collect_jobs(_measure, jobs, workers, progress, _describe)
 
 
@@ -519,6 +564,28 @@ def heat_map_image(grid_map: GridMap, results: Sequence[CellResult]) -> NDArray[
     )
 
 
+def sample_image(results: Sequence[CellResult]) -> NDArray[np.uint8]:
+    """The sampled cells' errors, boxes and cylinders apart, each sorted (so the share
+    of cells beyond a target reads off the x axis); the turn and slide of counted
+    cells only."""
+    panels = []
+    for key, label, target, counted in _PANELS:
+        series = {
+            plural: [
+                float(getattr(r, key))
+                for r in results
+                if r.cell.shape == shape and (not counted or getattr(r, counted))
+            ]
+            for plural, shape in (("boxes", "box"), ("cylinders", "cylinder"))
+        }
+        panels.append((label, series, target))
+    return sorted_errors(
+        f"{len(results)} grasps drawn from the whole grasp space",
+        panels,
+        note=f"dashed: the target; turn and slide: cells of margin >= {MARGIN:g} only",
+    )
+
+
 def write_outputs(
     results: Sequence[CellResult], out: Path, maps: Sequence[GridMap] = MAPS
 ) -> Iterator[Path]:
@@ -533,6 +600,9 @@ def write_outputs(
             image = heat_map_image(grid_map, rows)
             panels.append(image)
             yield write_png(image, out / f"grid_{grid_map.name}.png")
+    rows = [r for r in results if r.map == SAMPLE]
+    if rows:
+        yield write_png(sample_image(rows), out / "grid_sample.png")
     if panels:
         # All maps in one picture for the README.
         width = max(p.shape[1] for p in panels)

@@ -136,3 +136,49 @@ def test_a_cylinder_slips_when_no_contact_holds_not_when_its_arc_ends_slide(
     assert (
         0.8 * slipped["grip_normal_n"] < slipped["slip_normal_n"] < 1.05 * slipped["grip_normal_n"]
     )
+
+
+def test_a_sample_draws_every_parameter_across_the_issue_ranges() -> None:
+    cells = grid.sampled(300, seed=5)
+    assert {c.shape for c in cells} == {"box", "cylinder"}
+    for name, (low, high) in grid.SPACE.items():
+        values = [getattr(c, name) for c in cells]
+        assert low <= min(values) and max(values) <= high
+        # Spread over the range, not bunched at one end (the mass on a log scale).
+        if name == "mass":
+            low, high, values = math.log(low), math.log(high), [math.log(v) for v in values]
+        span = high - low
+        assert min(values) < low + 0.1 * span and max(values) > high - 0.1 * span
+    assert len({c.position for c in cells}) == len(cells)
+    assert grid.sampled(300, seed=5) == cells
+    assert grid.sampled(3, seed=6) != cells[:3]
+    with pytest.raises(ValueError, match="at least 1"):
+        grid.sampled(0)
+
+
+def test_a_sample_is_measured_as_one_map_and_drawn_sorted(
+    tmp_path: Path, canonical: grid.CellResult
+) -> None:
+    cylinder = replace(canonical, cell=replace(canonical.cell, shape="cylinder"))
+    results = [replace(canonical, map=grid.SAMPLE), replace(cylinder, map=grid.SAMPLE)]
+    names = {p.name for p in grid.write_outputs(results, tmp_path)}
+    assert {"grid.csv", "grid.md", "grid_sample.png"} <= names
+    assert "grid.png" not in names  # no map, no heat map
+    image = cv2.imread(str(tmp_path / "grid_sample.png"))
+    assert image is not None and image.shape[1] > 600
+    assert "| sample | 2/2 |" in (tmp_path / "grid.md").read_text()
+
+
+def test_run_grid_plays_a_sample_instead_of_the_maps(monkeypatch: pytest.MonkeyPatch) -> None:
+    played: list[tuple[grid.Cell, str]] = []
+
+    def measure(job: tuple[grid.Cell, str, str | None, str]) -> grid.CellResult:
+        played.append(job[:2])
+        return grid.CellResult(job[0], job[1])
+
+    monkeypatch.setattr(grid, "_measure", measure)
+    grid.run_grid(sample=4, seed=2)
+    assert [cell for cell, _ in played] == grid.sampled(4, seed=2)
+    assert {name for _, name in played} == {grid.SAMPLE}
+    with pytest.raises(ValueError, match="sample"):
+        grid.run_grid(sample=-1)

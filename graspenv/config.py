@@ -427,6 +427,17 @@ class PhysicsConfig:
         ccd: continuous collision detection for particles (swept sphere): the
             guard against hard strikes (tests/stability). Off in ``fast``, where it
             costs half the default's frame (README, "Speed against error").
+        ccd_sphere: the radius of the sphere CCD sweeps, as a share of the
+            particle's radius (Bullet's ``ccdSweptSphereRadius``; its motion
+            threshold is half that). Bullet wants a sphere embedded in the shape,
+            smaller than it. At a whole radius the sweep of a squeezed particle
+            hits the object it presses at once, and CCD stopped the particle's
+            motion along the side too: a 3.1 cm, 15 g cylinder squeezed 5.5 mm by
+            broad fingertips turned 0.3-2.1° short (five placements), and the
+            default's cylinders slipped nearer Coulomb than ``reference``'s only
+            because their particles were held. At a quarter CCD leaves a grasp
+            alone (the default's turn, slide and slip the same as ``fast``'s to the
+            digit) and still stops a 3 m/s strike (tests/stability/test_guards.py).
         allowed_ccd_penetration: Bullet's allowed CCD penetration, metres.
         contact_breaking_threshold: how far from an object or the table a particle's
             contacts form, metres: within it the solver stops a particle before it
@@ -480,6 +491,7 @@ class PhysicsConfig:
     max_particle_force: float = 20.0
     max_particle_speed: float = 5.0
     ccd: bool = True
+    ccd_sphere: float = 0.25
     allowed_ccd_penetration: float = 0.0005
     contact_breaking_threshold: float = 0.001
     reduced_objects: bool = True
@@ -502,6 +514,8 @@ class PhysicsConfig:
             raise ConfigError("physics.gravity and physics.table_friction must be >= 0")
         if not 0.0 < self.contact_erp <= 1.0:
             raise ConfigError(f"physics.contact_erp must be in (0, 1], got {self.contact_erp}")
+        if not 0.0 < self.ccd_sphere <= 1.0:
+            raise ConfigError(f"physics.ccd_sphere must be in (0, 1], got {self.ccd_sphere}")
 
 
 def _default_objects() -> tuple[ObjectConfig, ...]:

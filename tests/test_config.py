@@ -209,3 +209,10 @@ def test_the_di_table_file_is_the_default_scene_with_the_di_clean_ups() -> None:
     assert scene.replace(contacts={"vote_frames": 1, "close_px": 0, "fill_px": 0}) == (
         SceneConfig()
     )
+
+
+@pytest.mark.parametrize("value", [0.0, -0.25, 1.5])
+def test_the_ccd_sphere_is_a_share_of_the_particle(value: float) -> None:
+    with pytest.raises(ConfigError, match=r"physics.ccd_sphere must be in \(0, 1\]"):
+        load_config(None, physics={"ccd_sphere": value})
+    assert load_config(None, physics={"ccd_sphere": 1.0}).physics.ccd_sphere == 1.0

@@ -407,8 +407,10 @@ class ParticlePool:
         # mass= must come with localInertiaDiagonal: without it PyBullet sets the mass
         # of a maximal-coordinate body to zero and its positions become NaN.
         # A zero inertia diagonal is Bullet's "infinite inertia" (zero inverse).
-        # Bullet also sets the CCD motion threshold to half the swept radius.
-        ccd = {"ccdSweptSphereRadius": proxy.particle_radius} if physics.ccd else {}
+        # Bullet also sets the CCD motion threshold to half the swept radius. The
+        # sphere sits inside the particle (physics.ccd_sphere).
+        swept = physics.ccd_sphere * proxy.particle_radius
+        ccd = {"ccdSweptSphereRadius": swept} if physics.ccd else {}
         pb.changeDynamics(
             body,
             -1,

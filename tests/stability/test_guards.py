@@ -44,7 +44,7 @@ def _strike_at_four_substeps() -> Case:
 
 def _light_pinch_at_four_substeps() -> Case:
     obj = cases.box(mass=0.005)
-    return cases.pinch(obj, cases.scene(obj, physics={"max_substeps": 4}), "pinch 5 g", depth=0.005)
+    return cases.pinch(obj, cases.scene(obj, physics={"max_substeps": 4}), "pinch 5 g", depth=0.006)
 
 
 GUARDS = [
@@ -74,9 +74,13 @@ GUARDS = [
     # then 5 mm kept every invariant without the guard (points on the nearest
     # point). At 50 solver iterations a particle ended 2.77 mm inside the box.
     # Since a particle's contacts form 1 mm before it touches, 6 mm keeps every
-    # invariant without the guard (0.77 mm) and 5 mm breaks two (a particle 1.57 mm
-    # in, the speed bound; 0.04 mm in with the guard): the case is 5 mm now.
-    _off("proxy.mass_ratio", 0.0, _light_pinch_at_four_substeps, "inside_object"),
+    # invariant without the guard (0.77 mm) and 5 mm broke two (a particle 1.57 mm
+    # in, the speed bound; 0.04 mm in with the guard). Since CCD sweeps a sphere a
+    # quarter of the particle's size (physics.ccd_sphere; a whole particle's sweep
+    # held squeezed particles in place), 5 mm keeps every invariant without the
+    # guard (0.32 mm in) and 6 mm breaks the speed bound (the box thrown at
+    # 2.73 m/s against a bound of 1.81): the case is 6 mm now.
+    _off("proxy.mass_ratio", 0.0, _light_pinch_at_four_substeps, "speed"),
 ]
 
 

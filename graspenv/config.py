@@ -604,12 +604,14 @@ class SceneConfig:
 #: with the particle mass fixed it doubles the grip's stiffness and normal force, and
 #: the turn got worse (0.88° against 0.19°), so refining it does not converge.
 FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
-    # The default's model without continuous collision detection, which costs half
+    # The default's model without continuous collision detection, which cost half
     # of the default's frame (Bullet's stage of the canonical turn: 1.31 ms a frame
-    # with it, 0.33 ms without; per-stage minima of one bench run). Twice the
-    # default's speed with every error within twice the default's (2026-12-06: turn
+    # with it, 0.33 ms without; per-stage minima of one bench run, CCD then sweeping
+    # the whole particle). Every error within twice the default's (2026-12-06: turn
     # 0.18° against 0.11°, the slide, the slip, the two-hand carry and the noisy
-    # turn level, every drift within 0.06 mm of the reference). The sub-steps that
+    # turn level, every drift within 0.06 mm of the reference); since CCD sweeps a
+    # quarter of the particle (``physics.ccd_sphere``) every error of the bench is
+    # the default's to the digit, CCD acting only on strikes. The sub-steps that
     # follow the motion keep fast strikes out of objects without CCD, up to the cap
     # of 32 a frame (tests/stability/test_guards.py). The old preset (two sub-steps,
     # 6 mm spacing, maximal-coordinate objects: 22× real time, but its turn 1.8°
@@ -633,13 +635,13 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 #: poses of the benchmark's scenarios against the reference preset, each the mean
 #: over three sub-pixel placements (``graspenv bench``, README "Speed against
 #: error"), with the sub-steps that follow the motion (``physics.substep_travel``);
-#: the worst scenario is the flick for ``fast`` and the two-hand carry for
-#: ``default`` (measured 2026-12-06, ``graspenv bench --replays 1``). ``fast`` drifts
-#: no more than the default: both are within a tenth of a millimetre of the
-#: reference in every scenario, so ``auto`` picks ``fast`` for any budget of 0.053 mm
-#: or more (the old ``fast``, now envs_configs/coarse.toml, drifted 17.7 mm on the
-#: flick).
-PRESET_DRIFT_MM: dict[str, float] = {"fast": 0.053, "default": 0.079, "reference": 0.0}
+#: the worst scenario is the flick for both (measured 2026-12-06 after CCD's sphere
+#: shrank, ``graspenv bench --replays 1``; the default's was the two-hand carry's
+#: 0.079 mm before). ``fast`` drifts no more than the default: both are within a
+#: tenth of a millimetre of the reference in every scenario, so ``auto`` picks
+#: ``fast`` for any budget of 0.053 mm or more (the old ``fast``, now
+#: envs_configs/coarse.toml, drifted 17.7 mm on the flick).
+PRESET_DRIFT_MM: dict[str, float] = {"fast": 0.053, "default": 0.053, "reference": 0.0}
 
 
 def choose_fidelity(error_budget_mm: float) -> str:

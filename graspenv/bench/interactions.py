@@ -301,8 +301,9 @@ SCENARIOS: dict[str, tuple[Scenario, str]] = {
     "top rub, 1 kg": (top_rub_heavy, "box stays within 2 mm"),
     "turn 90°": (turn_in_place, "abs(yaw_error_deg) ≤ 1"),
     "slide 10 cm": (slide, "abs(travel_ratio − 1) ≤ 0.02"),
-    # 2 mm until the solver converged (tests/proxies/test_interactions.py says why).
-    "push, firm squeeze": (lambda s: third_finger(s, FIRM_SQUEEZE), "moved_mm < 2.5"),
+    # 2 mm until the solver converged, 2.5 mm until CCD stopped holding squeezed
+    # particles (tests/proxies/test_interactions.py says why).
+    "push, firm squeeze": (lambda s: third_finger(s, FIRM_SQUEEZE), "moved_mm < 3"),
     "push, light squeeze": (lambda s: third_finger(s, 0.0005), "moved_mm > 10"),
     "release": (release_push, "outward_mm > 0 (away from the tighter finger)"),
     "ball, 3 layers": (lambda s: ball_carry(s, 3), "stays in grasp"),

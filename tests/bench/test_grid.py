@@ -123,19 +123,24 @@ def test_a_cylinder_slips_when_no_contact_holds_not_when_its_arc_ends_slide(
     """A 3 cm, 100 g cylinder squeezed 3 mm: the least pressed particles at the ends
     of each fingertip's arc slide first while the most pressed hold it, and it
     creeps with their give. Coulomb's limit is gross slip, when it slides from under
-    all of them (measured against the grip's mean, this cell read 9 % short)."""
+    all of them: then it slips at Coulomb's force for the normal force it has
+    (0.1 % over; measured against the grip's mean, this cell read 9 % short). Its
+    give round the curved side cost 7.7 % of the settled normal force, and the slip
+    against the settled force is short by as much (7.5 %; 3.5 % while CCD's sweep
+    held the squeezed particles, README "CCD's sphere")."""
     cylinder = replace(grid.BASE_CELL, shape="cylinder", footprint=0.03, mass=0.1)
     # The grid's own cell, at its seeded place on the table.
     (cell,) = [c for c, _ in grid.grid_jobs(grid.MAPS) if replace(c, position=(0, 0)) == cylinder]
     slipped = grid.slip_run(base, cell).errors
-    assert abs(slipped["slip_error_pct"]) <= grid.SLIP_TARGET_PCT, slipped
+    assert abs(slipped["slip_error_then_pct"]) <= grid.SLIP_TARGET_PCT, slipped
     # It crept before it slipped: the grip's mean moved half a millimetre first.
     assert math.isfinite(slipped["creep_force_n"]), slipped
     assert slipped["creep_force_n"] < slipped["slip_force_n"]
-    # The grip gave before it slipped and lost some normal force, never gained much.
-    assert (
-        0.8 * slipped["grip_normal_n"] < slipped["slip_normal_n"] < 1.05 * slipped["grip_normal_n"]
-    )
+    # The grip gave before it slipped and lost some normal force, never gained much,
+    # and the shortfall against the settled force is that loss.
+    lost = slipped["slip_normal_n"] / slipped["grip_normal_n"] - 1.0
+    assert -0.2 < lost < 0.05, slipped
+    assert abs(slipped["slip_error_pct"] - 100.0 * lost) < 2.0, slipped
 
 
 def test_a_sample_draws_every_parameter_across_the_issue_ranges() -> None:

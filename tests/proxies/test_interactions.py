@@ -61,10 +61,14 @@ def test_5_firm_squeeze_resists_a_third_finger_light_one_does_not() -> None:
     # "Firmly" is 1 mm short of the penetration margin (FIRM_SQUEEZE): 4 mm at the
     # old 5 mm margin, 6 mm at 7 mm. The deeper margin lets the third finger's points
     # press 7 mm deep too; at 4 mm the box then gives 3.48 mm (and holds), at 6 mm
-    # 2.25 mm.
+    # 2.25 mm. The line is 3 mm since CCD sweeps a sphere a quarter of the particle
+    # (physics.ccd_sphere): the whole particle's sweep had held the squeezed
+    # particles where they were, and the grip gave 2.18 mm; its own law gives
+    # 2.90 mm, half of the give at which a 6 mm squeeze of friction 1 would slip.
+    # A second loosening, for the same kind of reason as the first.
     firm = scenarios.third_finger(PERSISTENT, scenarios.FIRM_SQUEEZE)["moved_mm"]
     light = scenarios.third_finger(PERSISTENT, 0.0005)["moved_mm"]
-    assert firm < 2.5
+    assert firm < 3.0
     assert light > 10.0
     assert firm < light / 5
 

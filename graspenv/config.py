@@ -425,8 +425,9 @@ class PhysicsConfig:
             within 2 % (README, "Accuracy across the grasp space").
         max_particle_speed: clamp on each particle's commanded speed, m/s.
         ccd: continuous collision detection for particles (swept sphere): the
-            guard against hard strikes (tests/stability). Off in ``fast``, where it
-            costs half the default's frame (README, "Speed against error").
+            guard against hard strikes (tests/stability). Off in ``fast``; it cost
+            half the default's frame while it swept the whole particle, about a
+            tenth since (README, "How fast").
         ccd_sphere: the radius of the sphere CCD sweeps, as a share of the
             particle's radius (Bullet's ``ccdSweptSphereRadius``; its motion
             threshold is half that). Bullet wants a sphere embedded in the shape,
@@ -436,8 +437,10 @@ class PhysicsConfig:
             broad fingertips turned 0.3-2.1° short (five placements), and the
             default's cylinders slipped nearer Coulomb than ``reference``'s only
             because their particles were held. At a quarter CCD leaves a grasp
-            alone (the default's turn, slide and slip the same as ``fast``'s to the
-            digit) and still stops a 3 m/s strike (tests/stability/test_guards.py).
+            nearly alone (every error of the bench the same as ``fast``'s to the
+            digit, the grid's and the sample's within a few hundredths) and still
+            stops a 3 m/s strike (tests/stability/test_guards.py). Unused when
+            ``ccd`` is off.
         allowed_ccd_penetration: Bullet's allowed CCD penetration, metres.
         contact_breaking_threshold: how far from an object or the table a particle's
             contacts form, metres: within it the solver stops a particle before it
@@ -627,6 +630,8 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
             "reduced_objects": True,
             "contact_erp": 0.4,
             "max_particle_force": 20.0,
+            "ccd": True,
+            "ccd_sphere": 0.25,
         },
     },
 }

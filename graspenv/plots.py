@@ -276,7 +276,8 @@ def sorted_errors(
         for level in (-target, target):
             ax.axhline(level, color="0.35", linestyle="--", linewidth=1.2)
         ax.set(title=label, xlabel="share of the cells, sorted by error", xlim=(0.0, 1.0))
-        ax.legend(loc="upper left")
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(loc="upper left")
     fig.suptitle(title, fontsize=11)
     if note:
         fig.text(0.5, 0.01, note, ha="center", va="bottom", fontsize=8, color=MUTED)

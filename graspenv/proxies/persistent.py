@@ -41,9 +41,10 @@ real fingertip. One camera frame:
    deeper than ``proxy.penetration_margin`` inside an object's footprint while the
    particle is below the object's top is lifted onto the top face, instead of
    pressing the side ever harder. The depth is the point's from the footprint's
-   nearest side or, if deeper, from the side the particle is at: a finger sliding
-   into a box along an edge stays within the margin of that edge while its
-   particles, stopped at the face it entered by, would fall ever farther behind.
+   nearest side or, if deeper, from the side the particle is at (there a particle
+   radius more is allowed): a finger sliding into a box along an edge stays within
+   the margin of that edge while its particles, stopped at the face it entered by,
+   would fall ever farther behind.
 
 With ``track_hand_rotation`` and ``predicted_resampling`` both off this is the
 paper's plain form: the raw previous contour matched against the tracker's contour

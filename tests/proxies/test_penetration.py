@@ -71,9 +71,10 @@ def test_a_finger_sliding_in_along_an_edge_puts_its_particles_on_top() -> None:
     """Points 2-4 mm inside the long edge never pass the margin from that edge, but
     the particles stopped at the end face fall behind them as the fingers go on:
     measured from the end face, they go on the top face once they are more than the
-    margin and a radius behind (9 mm; a frame's travel of 0.9 mm more at most).
+    margin and a radius behind (9 mm; up to 10 mm read after a frame's travel).
     Without the measure from the particle's side they fell 18-21 mm behind, the
-    whole travel, pushing on the end faces with the clamp's force."""
+    whole travel, pushing on the end faces with the clamp's force. The test holds
+    the measure itself; its radius of slack is the cylinder test's below."""
     proxy = load_config(None).proxy
     limit = proxy.penetration_margin + 2.0 * proxy.particle_radius
     for overlap in (0.002, 0.004):

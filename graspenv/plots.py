@@ -257,10 +257,20 @@ def sorted_errors(
     note: str = "",
     size: tuple[int, int] = (1080, 380),
 ) -> NDArray[np.uint8]:
-    """Side-by-side panels ``(title, {series: values}, target)``: each series' values
-    sorted and drawn against their share of the series (0 to 1), so that the share
-    beyond the target reads off the x axis; the target dashed at ±target, NaN left
-    out."""
+    """Side-by-side panels, each series' values sorted and drawn against their share
+    of the series (0 to 1), so that the share beyond the target reads off the x
+    axis; the target dashed at ±target, NaN left out.
+
+    Args:
+        title: the figure's title.
+        panels: ``(title, {series name: values}, target)`` per panel, the target in
+            the values' unit.
+        note: a line under the panels.
+        size: the picture's width and height, pixels.
+
+    Returns:
+        The picture, BGR.
+    """
     plt = _pyplot()
     fig, axes = plt.subplots(
         1, len(panels), figsize=(size[0] / _DPI, size[1] / _DPI), dpi=_DPI, squeeze=False

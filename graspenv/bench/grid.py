@@ -226,7 +226,16 @@ SAMPLE = "sample"
 def sampled(count: int, seed: int = 0) -> list[Cell]:
     """``count`` cells drawn at random from the whole of :data:`SPACE`, every
     parameter at once (the maps vary two at a time), half boxes and half upright
-    cylinders on average, each at its own place on the table (:func:`placed`)."""
+    cylinders on average, each at its own place on the table (:func:`placed`).
+
+    Args:
+        count: how many cells, at least 1.
+        seed: the draw's seed; the same seed gives the same cells, and a smaller
+            count the first of them.
+
+    Raises:
+        ValueError: ``count`` is below 1.
+    """
     if count < 1:
         raise ValueError(f"a sample needs at least 1 cell, got {count}")
     rng = np.random.default_rng(seed)

@@ -196,17 +196,20 @@ def test_ccd_leaves_a_squeezed_particle_free_along_the_side(base: SceneConfig) -
     """The sample's worst turn at the default: a 3.1 cm, 15 g cylinder of friction
     0.98 squeezed 5.5 mm by 11.7 mm fingertips. With CCD sweeping a sphere the
     particle's size, the sweep of every squeezed particle hit the cylinder and held
-    it in place, and the cylinder turned 1.77° short; with a quarter of it, 0.36°
-    (``fast``, without CCD, 0.38°)."""
+    it in place, and the cylinder turned 0.3-2.1° short over five placements (1.44°
+    on average); with a quarter of it 0.2-0.7° (0.35°; ``fast``, without CCD,
+    0.2-0.7°)."""
     cell = grid.Cell(
         shape="cylinder", footprint=0.031089, height=0.043811, mass=0.014942,
         friction=0.98014, depth=0.0054885, finger_radius=0.011725,
         position=(0.0014556, -0.025790),
     )  # fmt: skip
-    errors = {}
+    cells = [cell, *grid.placed([replace(cell, position=(0.0, 0.0))] * 4, seed=11)]
+    errors: dict[float, list[float]] = {}
     for share in (base.physics.ccd_sphere, 1.0):
         scene = base.replace(physics={"ccd_sphere": share})
-        _, turned, _, _ = grid.grasp_run(scene, cell, "turn")
-        errors[share] = math.degrees(turned - grid.TURN)
-    assert abs(errors[base.physics.ccd_sphere]) < 0.8, errors
-    assert abs(errors[1.0]) > 1.2, errors
+        errors[share] = [
+            abs(math.degrees(grid.grasp_run(scene, c, "turn")[1] - grid.TURN)) for c in cells
+        ]
+    assert max(errors[base.physics.ccd_sphere]) < 0.8, errors
+    assert sum(errors[1.0]) / len(cells) > 1.0, errors

@@ -58,6 +58,7 @@ import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -209,16 +210,18 @@ def placed(cells: Sequence[Cell], seed: int = 0) -> list[Cell]:
     return out
 
 
-#: The grasp space the maps cut through: each parameter's range (the mass drawn on a
-#: log scale). :func:`sampled` draws from all of them at once.
-SPACE: dict[str, tuple[float, float]] = {
-    "footprint": (0.03, 0.12),
-    "height": (0.01, 0.08),
-    "mass": (0.005, 2.0),
-    "friction": (0.3, 1.0),
-    "depth": (0.001, 0.006),
-    "finger_radius": (0.005, 0.012),
-}
+#: The grasp space the maps cut through: each parameter's range over the maps'
+#: cells (the mass drawn on a log scale). :func:`sampled` draws from all of them at
+#: once.
+SPACE: Mapping[str, tuple[float, float]] = MappingProxyType(
+    {
+        name: (
+            min(getattr(c, name) for m in MAPS for c in m.cells()),
+            max(getattr(c, name) for m in MAPS for c in m.cells()),
+        )
+        for name in ("footprint", "height", "mass", "friction", "depth", "finger_radius")
+    }
+)
 #: The map name of :func:`sampled` cells.
 SAMPLE = "sample"
 

@@ -227,8 +227,7 @@ def push_until_slip(
             row = sim.world.object_index("box")
             position = states.position[row]
             rotation = states.rotation[row].reshape(3, 3)
-            if state["start"] is None:
-                report = sim.contact_report("box")
+            if state["start"] is None:  # this frame's ``report`` is the settled grip's
                 ids = np.unique(report.particle[report.particle >= 0])
                 if ids.size == 0:  # no particle grips it (rigid proxies): no figure
                     return True

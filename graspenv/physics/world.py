@@ -567,11 +567,7 @@ class PhysicsWorld(Closeable):
             distance: a point is never nearer an object than its depth says (what
             culling needs to be safe). Shapes (N,).
         """
-        points = np.ascontiguousarray(xy, dtype=float).reshape(-1, 2)
-        states = self.object_states()
-        return footprint_depths(
-            points, self._bodies.shape_codes, self._bodies.sizes, states.position, states.rotation
-        )
+        return footprint_depths(*self._footprints(xy))
 
     def footprint_normal(self, xy: ArrayLike, near: float) -> NDArray[np.float64]:
         """The table-plane normal of the nearest object's side at each point (a box
@@ -585,16 +581,24 @@ class PhysicsWorld(Closeable):
         Returns:
             Unit normals, their sign arbitrary, or zero rows, shape (N, 2).
         """
+        return footprint_normals(*self._footprints(xy), near)
+
+    def _footprints(
+        self, xy: ArrayLike
+    ) -> tuple[
+        NDArray[np.float64],
+        NDArray[np.int64],
+        NDArray[np.float64],
+        NDArray[np.float64],
+        NDArray[np.float64],
+    ]:
+        """The arguments the compiled footprint measures share: the points as a
+        contiguous (N, 2) array, then every object's shape code, size, position
+        and rotation."""
         points = np.ascontiguousarray(xy, dtype=float).reshape(-1, 2)
         states = self.object_states()
-        return footprint_normals(
-            points,
-            self._bodies.shape_codes,
-            self._bodies.sizes,
-            states.position,
-            states.rotation,
-            near,
-        )
+        bodies = self._bodies
+        return points, bodies.shape_codes, bodies.sizes, states.position, states.rotation
 
     def contact_report(self, name: str) -> ContactReport:
         """Contacts on an object from the last physics sub-step.

@@ -195,8 +195,11 @@ def _bench(args: argparse.Namespace) -> int:
                 extra["seeds"] = list(dict.fromkeys(args.noise_seeds))
             if args.noise_level:
                 extra["levels"] = list(dict.fromkeys(args.noise_level))
+            if args.grid:
+                # The maps' seeded places on the table, or the sample's draw.
+                extra["seed"] = args.seed
             if args.sample is not None:
-                extra.update(sample=args.sample, seed=args.seed)
+                extra["sample"] = args.sample
             results = run(
                 config=args.config,
                 progress=say,
@@ -316,7 +319,8 @@ def _add_bench(sub: argparse._SubParsersAction) -> None:
         "--seed",
         type=int,
         default=0,
-        help="--fuzz: the first episode's seed; --grid --sample: the draw's",
+        help="--fuzz: the first episode's seed; --grid: the cells' places on the table"
+        " (with --sample, the draw's)",
     )
     p.add_argument(
         "--noise-seeds",

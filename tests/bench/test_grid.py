@@ -15,6 +15,7 @@ import cv2
 import pytest
 
 from graspenv.bench import grid
+from graspenv.cli import main
 from graspenv.config import SceneConfig, load_config
 
 
@@ -190,6 +191,31 @@ def test_run_grid_plays_a_sample_instead_of_the_maps(monkeypatch: pytest.MonkeyP
     assert {name for _, name in played} == {grid.SAMPLE}
     with pytest.raises(ValueError, match="sample"):
         grid.run_grid(sample=-1)
+
+
+@pytest.mark.parametrize("sample", [[], ["--sample", "3"]])
+def test_the_command_passes_its_seed_to_the_grid(
+    sample: list[str], monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+) -> None:
+    """``graspenv bench --grid --seed S`` places the maps' cells (or draws the
+    sample) with S: the same seed, the same cells; another, others."""
+    played: list[grid.Cell] = []
+
+    def measure(job: tuple[grid.Cell, str, str | None, str]) -> grid.CellResult:
+        played.append(job[0])
+        return grid.CellResult(job[0], job[1])
+
+    monkeypatch.setattr(grid, "_measure", measure)
+    monkeypatch.setattr(grid, "write_outputs", lambda results, out: [])
+    chosen = []
+    for seed in ("4", "4", "5"):
+        played.clear()
+        argv = ["bench", "--grid", *sample, "--seed", seed, "--workers", "1"]
+        assert main([*argv, "--out", str(tmp_path)]) == 0
+        chosen.append(list(played))
+    expected = grid.sampled(3, 4) if sample else [c for c, _ in grid.grid_jobs(grid.MAPS, 4)]
+    assert chosen[0] == chosen[1] == expected
+    assert chosen[2] != chosen[0]
 
 
 def test_ccd_leaves_a_squeezed_particle_free_along_the_side(base: SceneConfig) -> None:

@@ -39,7 +39,7 @@ class FrameStepper:
         physics: the Bullet settings (sub-step counts and travel).
         substeps: physics steps per frame at the configured rate.
         substep_dt: seconds per physics step at ``substeps`` (Bullet's time step
-            between frames).
+            after a frame of ``substeps``; after one of more, that frame's).
 
     Attributes:
         bullet_seconds: wall seconds spent inside Bullet's ``stepSimulation`` by the
@@ -62,6 +62,8 @@ class FrameStepper:
         self._physics = physics
         self._substeps = substeps
         self._substep_dt = substep_dt
+        # Bullet's time step now: the length of the last sub-step taken (run).
+        self._bullet_dt = substep_dt
         # Force and torque on each object (by index) for every sub-step of the next
         # frame, N and N·m, world frame.
         self._pending_force: dict[int, NDArray[np.float64]] = {}
@@ -135,11 +137,17 @@ class FrameStepper:
         """The frame's ``substeps`` physics sub-steps of ``frame_dt / substeps``
         seconds: for each s = 1..S, drive the proxies, push the objects, step Bullet,
         then observe. Pending pushes are dropped afterwards; :attr:`bullet_seconds`
-        gets the time in Bullet's step and :attr:`last_substeps` the count."""
+        gets the time in Bullet's step and :attr:`last_substeps` the count.
+
+        Bullet's time step is left at this frame's sub-step. PyBullet reports a
+        contact's forces as the impulses of the last step over the time step set when
+        they are read, so setting the configured step back after a frame of more
+        sub-steps understated every force read after it by the ratio of the steps
+        (in the grid's slides, five to seven sub-steps a frame, the default's grip read
+        2.8 N instead of 4.6 N)."""
         client = self._client
         h = frame_dt / substeps
-        if h != self._substep_dt:
-            pb.setTimeStep(h, physicsClientId=client)
+        self._set_step(h)
         clock = time.perf_counter
         step = pb.stepSimulation
         bullet = 0.0
@@ -155,9 +163,17 @@ class FrameStepper:
             if observe is not None:
                 observe()
         self.drop_pending()
-        if h != self._substep_dt:
-            pb.setTimeStep(self._substep_dt, physicsClientId=client)
         self.bullet_seconds = bullet
+
+    def configured_step(self) -> None:
+        """Set Bullet's time step to the configured sub-step, for a step taken
+        outside :meth:`run` (placing the objects)."""
+        self._set_step(self._substep_dt)
+
+    def _set_step(self, h: float) -> None:
+        if h != self._bullet_dt:
+            pb.setTimeStep(h, physicsClientId=self._client)
+            self._bullet_dt = h
 
     def _apply_pending(self) -> None:
         """Apply this frame's pushes for the coming sub-step (Bullet forgets them)."""

@@ -479,3 +479,30 @@ def test_a_particles_contacts_form_at_the_configured_distance(
             assert bool(points) == formed, (centre, gap)
             if formed:
                 assert points[0][8] == pytest.approx(gap, abs=1e-6)
+
+
+def test_forces_read_after_a_frame_of_more_sub_steps_are_the_frames_own(
+    world: PhysicsWorld,
+) -> None:
+    """A particle crossing the table 3 cm a frame, far from the box, gives the frame
+    more sub-steps; the resting box's table contacts still carry its weight, read
+    after that frame and after the next, ordinary one. PyBullet divides a contact's
+    impulse by the time step set when it is read: with the configured step set back
+    after the fast frame it read a fraction of the weight (the configured sub-steps
+    over the frame's)."""
+    box = world.scene.objects[0]
+    weight = box.mass * world.scene.physics.gravity
+    ids = world.pool.acquire(1)
+    r = world.pool.radius
+    world.pool.place(ids, [[0.25, -0.1, r]])
+    for frame in range(8):
+        world.step_frame(ids, [[0.25, -0.1 + 0.03 * (frame + 1)]])
+    assert world.last_substeps > world.substeps
+    report = world.contact_report(box.name)
+    table = (report.particle < 0) & (report.other_object < 0)
+    assert report.normal_force[table].sum() == pytest.approx(weight, rel=0.01)
+    for _ in range(10):  # the particle comes to rest: ordinary frames again
+        world.step_frame(ids, [[0.25, 0.14]])
+    assert world.last_substeps == world.substeps
+    report = world.contact_report(box.name)
+    assert report.normal_force[report.particle < 0].sum() == pytest.approx(weight, rel=0.01)

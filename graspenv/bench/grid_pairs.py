@@ -55,32 +55,50 @@ def paired(
 ) -> list[tuple[CellResult, CellResult]]:
     """The two runs of each cell, in ``first``'s order.
 
+    Args:
+        first: one setting's results (one or more grid runs).
+        second: the other's, with the same cells (map, grasp and place).
+
+    Returns:
+        (first's, second's) result of each cell.
+
     Raises:
-        ValueError: a cell (its map, grasp and place) is on one side only, or twice
-            on one side.
+        ValueError: a cell is on one side only, or twice on one side.
     """
 
     def keyed(results: Sequence[CellResult], side: str) -> dict[tuple[str, Cell], CellResult]:
         out: dict[tuple[str, Cell], CellResult] = {}
         for r in results:
             if (r.map, r.cell) in out:
-                raise ValueError(f"{side}: {r.map} {r.cell} is there twice")
+                raise ValueError(f"the {side} side holds {r.map} {r.cell} twice")
             out[(r.map, r.cell)] = r
         return out
 
     a, b = keyed(first, "first"), keyed(second, "second")
-    if a.keys() != b.keys():
-        only = sorted({f"{m}: {c.label()}" for m, c in a.keys() ^ b.keys()})
+    only_a, only_b = a.keys() - b.keys(), b.keys() - a.keys()
+    if only_a or only_b:
+        name, cell = min(only_a or only_b, key=str)
         raise ValueError(
-            f"the two sides hold different cells ({len(only)} on one side only, e.g. "
-            f"{only[0]}): run both with the same seeds and maps"
+            f"the two sides hold different cells: {len(only_a)} on the first side only, "
+            f"{len(only_b)} on the second (e.g. {name} {cell}); run both with the same "
+            "seeds and maps"
         )
     return [(a[k], b[k]) for k in a]
 
 
 def table(pairs: Sequence[tuple[CellResult, CellResult]], names: tuple[str, str]) -> str:
-    """Markdown: per map (and all), per figure, each side's mean |error| and count
-    within the target, and the mean paired difference ± its standard error."""
+    """Markdown: per map (and all), per figure, each side's mean abs error and count
+    within the target, and the mean paired difference ± its standard error.
+
+    Args:
+        pairs: from :func:`paired`.
+        names: the two sides' names, for the header.
+
+    Returns:
+        The table. A pair one side does not count (its margin under 2) or has no
+        figure for (NaN) is left out of that figure, and the last column says how
+        many were.
+    """
     first, second = names
     header = (
         "map",
@@ -90,6 +108,7 @@ def table(pairs: Sequence[tuple[CellResult, CellResult]], names: tuple[str, str]
         f"{second} − {first} (± s.e.)",
         f"{first} within",
         f"{second} within",
+        "left out",
     )
     groups: dict[str, list[tuple[CellResult, CellResult]]] = {}
     for pair in pairs:
@@ -103,52 +122,63 @@ def table(pairs: Sequence[tuple[CellResult, CellResult]], names: tuple[str, str]
             b = np.array([abs(getattr(q, field)) for _, q in both], dtype=float)
             keep = np.isfinite(a) & np.isfinite(b)
             a, b = a[keep], b[keep]
-            if a.size == 0:
-                continue
-            diff = b - a
-            error = math.nan
-            if diff.size > 1:
-                error = float(np.std(diff, ddof=1) / math.sqrt(diff.size))
-            rows.append(
-                (
-                    name,
-                    f"{label} ({unit})",
+            figures = ["—"] * 5
+            if a.size:
+                diff = b - a
+                error = "—"
+                if diff.size > 1:
+                    error = f"{float(np.std(diff, ddof=1) / math.sqrt(diff.size)):.3f}"
+                figures = [
                     f"{a.mean():.3f}",
                     f"{b.mean():.3f}",
-                    f"{diff.mean():+.3f} ± {error:.3f}",
+                    f"{diff.mean():+.3f} ± {error}",
                     f"{int(np.sum(a <= target))}/{a.size}",
                     f"{int(np.sum(b <= target))}/{b.size}",
-                )
-            )
+                ]
+            rows.append((name, f"{label} ({unit})", *figures, len(group) - a.size))
     return pipe_table(header, rows)
 
 
 def main(argv: Sequence[str]) -> int:
-    """``FIRST.csv … -- SECOND.csv …``: print the paired table."""
+    """``FIRST.csv … -- SECOND.csv …``: print the paired table (exit 0), or say on
+    stderr what is wrong with the arguments or the files (exit 2)."""
     args = list(argv)
     if args.count("--") != 1:
-        print("usage: python -m graspenv.bench.grid_pairs FIRST.csv ... -- SECOND.csv ...")
-        return 2
+        return _fail("usage: python -m graspenv.bench.grid_pairs FIRST.csv ... -- SECOND.csv ...")
     cut = args.index("--")
     sides = args[:cut], args[cut + 1 :]
     if not all(sides):
-        print("each side needs at least one grid.csv")
-        return 2
-    results = [[r for path in side for r in read_csv(Path(path))] for side in sides]
+        return _fail("each side needs at least one grid.csv")
     try:
+        results = [[r for path in side for r in read_csv(Path(path))] for side in sides]
         pairs = paired(*results)
-    except ValueError as error:
-        print(error)
-        return 2
-    names = tuple(_side_name(side) for side in sides)
-    print(table(pairs, (names[0], names[1])))
+    except OSError as error:
+        return _fail(f"cannot read {error.filename}: {error.strerror}")
+    except (KeyError, ValueError) as error:
+        text = f"a file lacks the column {error}" if isinstance(error, KeyError) else error
+        return _fail(f"{text}")
+    if not pairs:
+        return _fail("the files hold no cells")
+    print(table(pairs, _side_names(sides)))
     print(f"\n{len(pairs)} cells in pairs, from {len(sides[0])} and {len(sides[1])} files.")
     return 0
 
 
-def _side_name(paths: Sequence[str]) -> str:
-    """A short name for one side: the folder its files share."""
-    return Path(os.path.commonpath([os.path.abspath(Path(p).parent) for p in paths])).name
+def _fail(message: str) -> int:
+    print(message, file=sys.stderr)
+    return 2
+
+
+def _side_names(sides: tuple[list[str], list[str]]) -> tuple[str, str]:
+    """Each side's name: the folder its files share, or "first" and "second" where
+    that does not tell them apart."""
+    names = tuple(
+        Path(os.path.commonpath([os.path.abspath(Path(p).parent) for p in paths])).name
+        for paths in sides
+    )
+    if names[0] == names[1] or not all(names):
+        return "first", "second"
+    return names[0], names[1]
 
 
 if __name__ == "__main__":

@@ -204,7 +204,7 @@ class PhysicsWorld(Closeable):
         """Put every object at its initial pose, at rest, with no contact history
         (:func:`~graspenv.physics.bodies.place_objects`, one physics step of the
         configured length, as in a fresh world)."""
-        self._stepper.configured_step()
+        self._stepper.use_configured_step()
         place_objects(self.client, self.scene, self._object_bodies)
         self.pool.physics_steps += 1
         self._states = None

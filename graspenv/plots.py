@@ -277,7 +277,8 @@ def sorted_errors(
     )
     for ax, (label, series, target) in zip(axes[0], panels, strict=True):
         for name, values in series.items():
-            ys = np.sort(np.asarray(values, float)[np.isfinite(np.asarray(values, float))])
+            raw = np.asarray(values, float)
+            ys = np.sort(raw[np.isfinite(raw)])
             if ys.size:
                 xs = (np.arange(ys.size) + 0.5) / ys.size
                 ax.plot(

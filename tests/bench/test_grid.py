@@ -178,14 +178,23 @@ def test_a_sample_is_measured_as_one_map_and_drawn_sorted(
     assert "| sample | 2/2 |" in (tmp_path / "grid.md").read_text()
 
 
-def test_run_grid_plays_a_sample_instead_of_the_maps(monkeypatch: pytest.MonkeyPatch) -> None:
-    played: list[tuple[grid.Cell, str]] = []
+@pytest.fixture
+def played(monkeypatch: pytest.MonkeyPatch) -> list[tuple[grid.Cell, str]]:
+    """The (cell, map) of every job the grid hands out, in order, measured as
+    nothing (an empty result each)."""
+    jobs: list[tuple[grid.Cell, str]] = []
 
     def measure(job: tuple[grid.Cell, str, str | None, str]) -> grid.CellResult:
-        played.append(job[:2])
+        jobs.append(job[:2])
         return grid.CellResult(job[0], job[1])
 
     monkeypatch.setattr(grid, "_measure", measure)
+    return jobs
+
+
+def test_run_grid_plays_a_sample_instead_of_the_maps(
+    played: list[tuple[grid.Cell, str]],
+) -> None:
     grid.run_grid(sample=4, seed=2)
     assert [cell for cell, _ in played] == grid.sampled(4, seed=2)
     assert {name for _, name in played} == {grid.SAMPLE}
@@ -195,24 +204,20 @@ def test_run_grid_plays_a_sample_instead_of_the_maps(monkeypatch: pytest.MonkeyP
 
 @pytest.mark.parametrize("sample", [[], ["--sample", "3"]])
 def test_the_command_passes_its_seed_to_the_grid(
-    sample: list[str], monkeypatch: pytest.MonkeyPatch, tmp_path: Path
+    sample: list[str],
+    played: list[tuple[grid.Cell, str]],
+    monkeypatch: pytest.MonkeyPatch,
+    tmp_path: Path,
 ) -> None:
     """``graspenv bench --grid --seed S`` places the maps' cells (or draws the
     sample) with S: the same seed, the same cells; another, others."""
-    played: list[grid.Cell] = []
-
-    def measure(job: tuple[grid.Cell, str, str | None, str]) -> grid.CellResult:
-        played.append(job[0])
-        return grid.CellResult(job[0], job[1])
-
-    monkeypatch.setattr(grid, "_measure", measure)
     monkeypatch.setattr(grid, "write_outputs", lambda results, out: [])
     chosen = []
     for seed in ("4", "4", "5"):
         played.clear()
         argv = ["bench", "--grid", *sample, "--seed", seed, "--workers", "1"]
         assert main([*argv, "--out", str(tmp_path)]) == 0
-        chosen.append(list(played))
+        chosen.append([cell for cell, _ in played])
     expected = grid.sampled(3, 4) if sample else [c for c, _ in grid.grid_jobs(grid.MAPS, 4)]
     assert chosen[0] == chosen[1] == expected
     assert chosen[2] != chosen[0]

@@ -212,7 +212,9 @@ def _bench(args: argparse.Namespace) -> int:
     if args.fuzz is not None:
         from graspenv.bench.fuzz import run_fuzz
 
-        fuzzed = run_fuzz(args.fuzz, args.seed, args.workers, say, preset=args.preset)
+        fuzzed = run_fuzz(
+            args.fuzz, args.seed, args.workers, say, preset=args.preset, config=args.config
+        )
         print(fuzzed.text())
         print(f"wrote {fuzzed.write(Path(args.out) / 'fuzz.csv')}")
         return 1 if fuzzed.failures else 0

@@ -18,7 +18,8 @@ Each episode is drawn from its own seed, so any one can be played again alone
 The invariants are :mod:`graspenv.bench.invariants`' (finite state, objects above
 the table and not tunnelling, particles out of objects, object speeds within the
 bound the fingers allow), at the default settings or at a fidelity preset
-(``--preset``).
+(``--preset``), over a scene file's settings (``--config``; the episodes' objects and
+table stay their own).
 """
 
 from __future__ import annotations
@@ -172,8 +173,9 @@ def _crossing_pair(
     return pair[0], pair[1]
 
 
-def episode(seed: int) -> Episode:
-    """The episode of a seed (the same on every machine)."""
+def episode(seed: int, base: SceneConfig | None = None) -> Episode:
+    """The episode of a seed (the same on every machine), its settings those of
+    ``base`` (default: the built-in scene)."""
     rng = np.random.default_rng([seed, 2026])
     first = (float(rng.uniform(-0.04, 0.04)), float(rng.uniform(-0.03, 0.03)))
     objects = [_object(rng, "a", first)]
@@ -200,7 +202,7 @@ def episode(seed: int) -> Episode:
             hole_radius=float(rng.uniform(1.0, 4.0)),
             jitter=float(rng.uniform(0.0, 2.0)),
         )
-    scene = load_config(None).replace(
+    scene = (load_config(None) if base is None else base).replace(
         surface={"size": TABLE_SIZE, "resolution": TABLE_PIXELS},
         physics={"table_friction": float(rng.uniform(0.0, 2.0))},
         objects=[to_dict(o) for o in objects],
@@ -228,11 +230,12 @@ class Outcome:
     deepest_mm: float = -math.inf
 
 
-def play(seed: int, preset: str = "default") -> Outcome:
+def play(seed: int, preset: str = "default", config: str | None = None) -> Outcome:
     """Play a seed's episode through the whole pipeline at a fidelity ``preset``
-    (:data:`~graspenv.config.FIDELITY_PRESETS`), checking every frame."""
+    (:data:`~graspenv.config.FIDELITY_PRESETS`) over the settings of the scene file
+    ``config`` (default: the built-in scene), checking every frame."""
     tic = time.perf_counter()
-    ep = episode(seed)
+    ep = episode(seed, None if config is None else load_config(config))
     hands = ep.hands()
     rng = np.random.default_rng(seed)
     with Simulation(at_fidelity(ep.scene, preset)) as sim:
@@ -329,12 +332,17 @@ def run_fuzz(
     workers: int = 1,
     progress: Callable[[str], None] | None = None,
     preset: str = "default",
+    config: str | None = None,
 ) -> FuzzReport:
     """Play episodes ``first_seed`` .. ``first_seed + count - 1`` (in ``workers``
-    processes) at a fidelity ``preset``, reporting progress every 2 % of the run."""
+    processes) at a fidelity ``preset`` over the settings of the scene file
+    ``config`` (its objects and table are the episodes' own), reporting progress
+    every 2 % of the run."""
     if count < 1 or workers < 1:
         raise ValueError(f"count and workers must be at least 1, got {count} and {workers}")
     resolve_fidelity(preset)  # a bad name fails here, not in a worker
+    if config is not None:
+        load_config(config)  # and so does a bad scene file
     tic = time.perf_counter()
     outcomes: list[Outcome] = []
     step = max(1, count // 50)
@@ -348,5 +356,7 @@ def run_fuzz(
             progress(f"[{done}/{count}] {bad} broke an invariant; {rate:.1f} episodes/s")
 
     seeds = range(first_seed, first_seed + count)
-    run_jobs(functools.partial(play, preset=preset), seeds, workers, note, chunksize=8)
+    run_jobs(
+        functools.partial(play, preset=preset, config=config), seeds, workers, note, chunksize=8
+    )
     return FuzzReport(outcomes, time.perf_counter() - tic, preset)

@@ -46,6 +46,14 @@ real fingertip. One camera frame:
    the margin of that edge while its particles, stopped at the face it entered by,
    would fall ever farther behind.
 
+7. *Side hold* (``proxy.hold_time``, an option off in every preset; README, "The
+   side hold"). Each contact whose particles press an object's side has all its
+   targets shifted along that side by one offset, the integral of how far the
+   particles stood behind the hand along it, over the hold time: a fingertip is
+   rigid, so under a steady load along the side its particles stay where the hand
+   puts them instead of giving by the load over the law's stiffness
+   (:func:`_side_hold`).
+
 With ``track_hand_rotation`` and ``predicted_resampling`` both off this is the
 paper's plain form: the raw previous contour matched against the tracker's contour
 (with either on, the predicted points are matched).
@@ -64,6 +72,7 @@ from graspenv.contacts.resample import follow_kernel, gather, gather_rows, resam
 from graspenv.contacts.tracking import ContactFrame, ContactSet
 from graspenv.geometry import Polylines, bounds_of, reach_from
 from graspenv.jit import njit
+from graspenv.physics.control import REST_TOLERANCE
 from graspenv.physics.world import PhysicsWorld
 from graspenv.proxies.base import ProxyCommand, rotation_kernel
 
@@ -107,6 +116,8 @@ class _Tracks(NamedTuple):
         travel: how far any point of each contact moved in the last frame at most,
             metres, shape (T,).
         smoothed: each contact's filtered centroid.
+        hold: each contact's side hold, the shift of its targets along the side
+            its particles press, metres, (T, 2) (zero without ``proxy.hold_time``).
     """
 
     ids: NDArray[np.int64]
@@ -116,6 +127,7 @@ class _Tracks(NamedTuple):
     centroids: NDArray[np.float64]
     travel: NDArray[np.float64]
     smoothed: _Smoothed
+    hold: NDArray[np.float64]
 
     @classmethod
     def empty(cls, layers: int) -> _Tracks:
@@ -123,7 +135,7 @@ class _Tracks(NamedTuple):
         return cls(
             np.zeros(0, np.int64), Polylines(points, np.zeros(1, np.intp)),
             np.zeros((0, layers), np.int64), np.zeros(0, bool), points, np.zeros(0),
-            _Smoothed(points, points),
+            _Smoothed(points, points), points,
         )  # fmt: skip
 
 
@@ -159,6 +171,9 @@ class PersistentProxies:
         self._tracks = _Tracks.empty(layers)
         self.hand_turn = 0.0
         """The hand's estimated turn in the last frame, radians."""
+        # The share of the particles' shortfall along a side the hold takes up a
+        # frame (proxy.hold_time; 0: off).
+        self._hold_gain = min(1.0, dt / proxy.hold_time) if proxy.hold_time > 0 else 0.0
 
     def reset(self) -> None:
         self._tracks = _Tracks.empty(self._layers)
@@ -213,7 +228,7 @@ class PersistentProxies:
         sizes = np.diff(tracks.contours.bounds)
         spin = np.repeat(np.where(plan.follows, plan.motion.turn / self._dt, 0.0), sizes)
         particles, targets, born = tracks.particles, tracks.contours.points, tracks.born
-        if self._cull or proxy.penetration_limit:
+        if self._cull or proxy.penetration_limit or self._hold_gain > 0.0:
             owner, depth = self._world.footprint_depth(targets)
         culled = 0
         if self._cull:
@@ -227,6 +242,13 @@ class PersistentProxies:
             owner, depth = owner[embodied], depth[embodied]
         else:
             particles, targets, born = particles.copy(), targets.copy(), born.copy()
+        if self._hold_gain > 0.0:
+            track_of = np.repeat(np.arange(len(tracks.ids)), sizes)
+            if self._cull:
+                track_of = track_of[embodied]
+            # In place, as the culling: the tracks keep the new hold.
+            tracks.hold[:] = self._holds_after(tracks.hold, track_of, particles, born, owner, depth)
+            targets = targets + tracks.hold[track_of]
         if proxy.penetration_limit:
             self._limit_penetration(particles, targets, owner, depth)
         return ProxyCommand(particles, targets, spin, culled=culled, born=born)
@@ -303,7 +325,7 @@ class PersistentProxies:
             points = _smooth_points(previous, motion, current, match.predecessor, proxy.smoothing)
         return _Tracks(
             plan.ids, Polylines(points, plan.current.bounds), particles, born, centroids,
-            plan.travel, smoothed,
+            plan.travel, smoothed, before.hold[plan.track_rows],
         )  # fmt: skip
 
     def _touch_down(
@@ -326,10 +348,12 @@ class PersistentProxies:
             self._put_down(particles, points)
             born = np.ones(len(points), bool)
         new_drift = np.full((new.size, 2), np.nan)
+        new_hold = np.zeros((new.size, 2))
         if followed.ids.size == 0:
             return _Tracks(
                 now.ids[new], Polylines(points, bounds), particles, born,
                 new_centroids.copy(), np.zeros(new.size), _Smoothed(new_centroids, new_drift),
+                new_hold,
             )  # fmt: skip
         # Both kinds together, then in the frame's (ascending id) order.
         sizes = np.concatenate([np.diff(followed.contours.bounds), np.diff(bounds)])
@@ -347,7 +371,50 @@ class PersistentProxies:
                 np.concatenate([smoothed.centroids, new_centroids])[order],
                 np.concatenate([smoothed.drift, new_drift])[order],
             ),
+            np.concatenate([followed.hold, new_hold])[order],
         )
+
+    def _holds_after(
+        self,
+        hold: NDArray[np.float64],
+        track_of: NDArray[np.intp],
+        particles: NDArray[np.int64],
+        born: NDArray[np.bool_],
+        owner: NDArray[np.int64],
+        depth: NDArray[np.float64],
+    ) -> NDArray[np.float64]:
+        """Each contact's side hold after this frame (step 7 of the module docstring).
+
+        A particle counts if its point lies inside an object's footprint, it was
+        not put down this frame and it stands on the table beside the object (not
+        on a top face). Its shortfall is where the hand put it last frame (its last
+        target less its contact's hold then) less where it is; a particle a merged
+        contact inherited was held with its old contact's hold, which for that one
+        frame counts as shortfall.
+
+        Args:
+            hold: each contact's hold before this frame, metres, (T, 2).
+            track_of: each row's contact, (K,).
+            particles, born: the rows' particle stacks (K, L) and which were put
+                down this frame.
+            owner, depth: the object whose footprint holds each point deepest and
+                that depth, metres, negative outside; (K,) each.
+
+        Returns:
+            The new holds, metres, (T, 2).
+        """
+        world = self._world
+        pool = world.pool
+        rows = np.flatnonzero((owner >= 0) & (depth > 0.0) & ~born)
+        at = pool.positions(particles[rows, 0])
+        low = at[:, 2] < pool.radius + REST_TOLERANCE
+        rows, at = rows[low], at[low, :2]
+        contact = track_of[rows]
+        shortfall = pool.last_targets(particles[rows, 0]) - hold[contact] - at
+        outward = world.footprint_normal(at, 2.0 * pool.radius)
+        centre = world.object_states().position[owner[rows], :2]
+        outward *= np.where(np.einsum("ij,ij->i", at - centre, outward) < 0.0, -1.0, 1.0)[:, None]
+        return _side_hold(hold, self._hold_gain, contact, shortfall, outward)
 
     def _release(self, particles: NDArray[np.int64]) -> None:
         """Give back the particles of some rows of a track (culled rows have none)."""
@@ -620,6 +687,47 @@ def _alpha_beta(
         rate[k, 0] = velocity[k, 0] + beta * sx
         rate[k, 1] = velocity[k, 1] + beta * sy
     return smoothed, rate
+
+
+def _side_hold(
+    hold: NDArray[np.float64],
+    gain: float,
+    contact: NDArray[np.intp],
+    shortfall: NDArray[np.float64],
+    outward: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Each contact's side hold after a frame: the hold plus ``gain`` times its
+    particles' mean shortfall, less its part along their mean outward normal (the
+    squeeze is the law's own and stays); a contact with no particle on a side lets
+    its hold go by the same share.
+
+    Args:
+        hold: each contact's hold, metres, (T, 2).
+        gain: the frame over the hold time, at most 1.
+        contact: the contact of each particle pressing a side, (N,).
+        shortfall: where the hand put it less where it is, metres, (N, 2).
+        outward: the side's outward normal there, (N, 2); zero rows count for no
+            direction.
+
+    Returns:
+        The new holds, metres, (T, 2).
+    """
+    count = len(hold)
+    after = hold * (1.0 - gain)
+    particles = np.bincount(contact, minlength=count)
+    pressed = particles > 0
+    if not np.any(pressed):
+        return after
+    lag = np.zeros((count, 2))
+    np.add.at(lag, contact, shortfall)
+    lag /= np.maximum(particles, 1)[:, None]
+    normal = np.zeros((count, 2))
+    np.add.at(normal, contact, outward)
+    normal /= np.maximum(np.hypot(normal[:, 0], normal[:, 1]), 1e-12)[:, None]
+    total = hold + gain * lag
+    total -= np.einsum("ij,ij->i", total, normal)[:, None] * normal
+    after[pressed] = total[pressed]
+    return after
 
 
 @njit

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from graspenv.bench import fuzz
+from graspenv.config import ConfigError, load_config
 
 #: Seeds 0-23: the ones that break an invariant, and why. None since the sub-steps
 #: follow the motion (physics.substep_travel): seed 0, a fingertip at 1.7 m/s that
@@ -169,3 +170,17 @@ def test_fuzz_refuses_an_unknown_preset_before_it_plays(monkeypatch: pytest.Monk
     monkeypatch.setattr(fuzz, "play", play)
     with pytest.raises(ValueError, match="fidelity must be one of"):
         fuzz.run_fuzz(1, preset="fastest")
+
+
+def test_an_episode_takes_a_scene_files_settings(tmp_path: Path) -> None:
+    """``--config``: the file's settings, the episode's own objects and table."""
+    scene_file = tmp_path / "held.toml"
+    scene_file.write_text("[proxy]\nhold_time = 0.05\n")
+    plain, held = fuzz.episode(7), fuzz.episode(7, load_config(scene_file))
+    assert held.scene.proxy.hold_time == 0.05 and plain.scene.proxy.hold_time == 0.0
+    assert held.scene.objects == plain.scene.objects
+    assert held.scene.replace(proxy={"hold_time": 0.0}) == plain.scene
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[proxy]\nhold = 1\n")
+    with pytest.raises(ConfigError, match="hold"):
+        fuzz.run_fuzz(1, config=str(bad))

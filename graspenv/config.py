@@ -336,10 +336,10 @@ class ProxyConfig:
             side by its load over the law's stiffness, up to the friction coefficient
             times the squeeze depth before it slips, and on a curved side that give
             costs normal force. At 0.05 s and ``reference`` the grid's cylinders
-            slipped within 5 % of Coulomb in 81 of 100 cells instead of 44 and its
-            turns erred 0.095° instead of 0.143° on average, but the two-hand carry
+            slipped within 5 % of Coulomb in 84 of 100 cells instead of 44 and its
+            turns erred 0.085° instead of 0.143° on average, but the two-hand carry
             ended 1.9 mm off instead of 1.3 and the flat box slipped 1 % beyond
-            Coulomb instead of 0.2 % short (README, "The side hold").
+            Coulomb instead of 0.16 % (README, "The side hold").
         instant_stride: pixel subsample of the instant method's gradient pixels.
         rigid_height: height of the rigid method's contact bodies, metres.
     """

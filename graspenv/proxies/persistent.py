@@ -697,37 +697,48 @@ def _side_hold(
     outward: NDArray[np.float64],
 ) -> NDArray[np.float64]:
     """Each contact's side hold after a frame: the hold plus ``gain`` times its
-    particles' mean shortfall, less its part along their mean outward normal (the
-    squeeze is the law's own and stays); a contact with no particle on a side lets
-    its hold go by the same share.
+    particles' mean shortfall along their sides, less the part of that along their
+    mean outward normal; a contact with no particle on a side lets its hold go by
+    the same share.
+
+    The squeeze is the law's own and stays out of it twice over: each particle's
+    shortfall along its own side's normal is dropped, and so is what is left along
+    the contact's mean normal (particles stuck round a curve stand short along the
+    squeeze, which each one's side sees partly along it). A particle with no side
+    normal (by a leaning cylinder) has no side to hold along and does not count.
 
     Args:
         hold: each contact's hold, metres, (T, 2).
         gain: the frame over the hold time, at most 1.
         contact: the contact of each particle pressing a side, (N,).
         shortfall: where the hand put it less where it is, metres, (N, 2).
-        outward: the side's outward normal there, (N, 2); zero rows count for no
-            direction.
+        outward: the side's outward normal there, (N, 2), or a zero row.
 
     Returns:
         The new holds, metres, (T, 2).
     """
     count = len(hold)
     after = hold * (1.0 - gain)
+    sided = np.any(outward != 0.0, axis=1)
+    contact, shortfall, outward = contact[sided], shortfall[sided], outward[sided]
     particles = np.bincount(contact, minlength=count)
     pressed = particles > 0
     if not np.any(pressed):
         return after
     lag = np.zeros((count, 2))
-    np.add.at(lag, contact, shortfall)
+    np.add.at(lag, contact, _less_along(shortfall, outward))
     lag /= np.maximum(particles, 1)[:, None]
     normal = np.zeros((count, 2))
     np.add.at(normal, contact, outward)
     normal /= np.maximum(np.hypot(normal[:, 0], normal[:, 1]), 1e-12)[:, None]
-    total = hold + gain * lag
-    total -= np.einsum("ij,ij->i", total, normal)[:, None] * normal
-    after[pressed] = total[pressed]
+    after[pressed] = _less_along(hold + gain * lag, normal)[pressed]
     return after
+
+
+def _less_along(vectors: NDArray[np.float64], unit: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Each row of ``vectors`` less its part along the same row of ``unit`` (a unit
+    vector or zero), shape (N, 2)."""
+    return vectors - np.einsum("ij,ij->i", vectors, unit)[:, None] * unit
 
 
 @njit

@@ -55,6 +55,27 @@ def test_a_squeeze_round_a_curve_is_not_taken_for_a_give() -> None:
     np.testing.assert_allclose(hold, 0.0, atol=1e-15)
 
 
+def test_an_uneven_squeeze_round_a_curve_is_not_taken_for_a_give() -> None:
+    """Particles round an arc squeezed unevenly (deepest at its middle, one end
+    gone): their shortfalls along their own normals are the squeeze alone, though
+    their mean points off the mean normal."""
+    angles = np.radians([-40.0, -20.0, 0.0, 20.0])
+    outward = -np.column_stack([np.cos(angles), np.sin(angles)])
+    depths = np.array([0.001, 0.004, 0.006, 0.003])
+    shortfall = -depths[:, None] * outward
+    hold = _side_hold(np.zeros((1, 2)), GAIN, np.zeros(len(angles), np.intp), shortfall, outward)
+    np.testing.assert_allclose(hold, 0.0, atol=1e-15)
+
+
+def test_a_particle_with_no_side_does_not_count() -> None:
+    """By a leaning cylinder the footprint has no side to follow (a zero normal):
+    the particle's shortfall, all squeeze, must not become a hold."""
+    outward = np.array([[0.0, 0.0], [0.0, 0.0]])
+    shortfall = np.array([[0.004, 0.0], [0.003, 0.0005]])
+    hold = _side_hold(np.array([[0.0, 0.001]]), GAIN, np.zeros(2, np.intp), shortfall, outward)
+    np.testing.assert_allclose(hold, [[0.0, (1 - GAIN) * 0.001]])
+
+
 def test_a_negative_hold_time_is_refused() -> None:
     with pytest.raises(ConfigError, match="hold_time"):
         ProxyConfig(hold_time=-0.1)
@@ -100,7 +121,7 @@ def test_a_held_grip_does_not_give_under_a_push(obj: ObjectConfig) -> None:
     """The rigid grasp's ground truth: a push of half Coulomb's force moves a gripped
     object nowhere. Without the hold the grip gives by the push over the law's
     stiffness (2 mm for the canonical box and for the cylinder); with it the give
-    is taken up (0.015 and 0.08 mm), and the squeeze is the same."""
+    is taken up (0.015 and 0.07 mm), and the squeeze is the same."""
     give, settled, _ = _push(obj, 0.0)
     held, settled_held, pushed_held = _push(obj, 0.05)
     assert give > 2e-4, f"the plain grip gave only {1000 * give:.3f} mm"

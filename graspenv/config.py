@@ -339,7 +339,9 @@ class ProxyConfig:
             slipped within 5 % of Coulomb in 84 of 100 cells instead of 44 and its
             turns erred 0.085° instead of 0.143° on average, but the two-hand carry
             ended 1.9 mm off instead of 1.3 and the flat box slipped 1 % beyond
-            Coulomb instead of 0.16 % (README, "The side hold").
+            Coulomb instead of 0.16 % (README, "The side hold"). A hold time of a
+            frame or less takes up the whole shortfall each frame; only the
+            ``persistent`` method has it.
         instant_stride: pixel subsample of the instant method's gradient pixels.
         rigid_height: height of the rigid method's contact bodies, metres.
     """

@@ -262,6 +262,7 @@ class FuzzReport:
     outcomes: list[Outcome]
     seconds: float
     preset: str = "default"
+    config: str | None = None
 
     @property
     def failures(self) -> list[Outcome]:
@@ -273,7 +274,9 @@ class FuzzReport:
             for name in outcome.broken:
                 counts[name] = counts.get(name, 0) + 1
         lines = [
-            f"{len(self.outcomes)} episodes at the {self.preset} preset in {self.seconds:.0f} s: "
+            f"{len(self.outcomes)} episodes at the {self.preset} preset"
+            + (f" over {self.config}" if self.config else "")
+            + f" in {self.seconds:.0f} s: "
             f"{len(self.failures)} broke an invariant"
             + (
                 " (" + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())) + ")"
@@ -359,4 +362,4 @@ def run_fuzz(
     run_jobs(
         functools.partial(play, preset=preset, config=config), seeds, workers, note, chunksize=8
     )
-    return FuzzReport(outcomes, time.perf_counter() - tic, preset)
+    return FuzzReport(outcomes, time.perf_counter() - tic, preset, config)

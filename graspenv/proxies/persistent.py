@@ -47,12 +47,13 @@ real fingertip. One camera frame:
    would fall ever farther behind.
 
 7. *Side hold* (``proxy.hold_time``, an option off in every preset; README, "The
-   side hold"). Each contact whose particles press an object's side has all its
-   targets shifted along that side by one offset, the integral of how far the
-   particles stood behind the hand along it, over the hold time: a fingertip is
-   rigid, so under a steady load along the side its particles stay where the hand
-   puts them instead of giving by the load over the law's stiffness
-   (:func:`_side_hold`).
+   side hold"). All of a contact's targets are shifted by one offset along the side
+   its particles press, the integral of how far they stood behind the hand along
+   it, over the hold time: a fingertip is rigid, so under a steady load along the
+   side its particles stay where the hand puts them instead of giving by the load
+   over the law's stiffness (:func:`_side_hold`). A contact that presses no side
+   lets its hold go at the same rate. Particles put down this frame start at their
+   points and reach the shifted targets in the frame.
 
 With ``track_hand_rotation`` and ``predicted_resampling`` both off this is the
 paper's plain form: the raw previous contour matched against the tracker's contour
@@ -61,6 +62,7 @@ paper's plain form: the raw previous contour matched against the tracker's conto
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
 import numpy as np
@@ -84,6 +86,12 @@ __all__ = ["PersistentProxies"]
 #: contour that grew by a point. At 2 mm spacing, two spacings put points of a
 #: sliding grip's leading edge down too (the slide's error 0.27 -> 0.88 mm).
 FAR_FROM_ANCHOR = 2.0
+
+#: The side hold counts a contact only where its particles' side normals add up to
+#: at least this share of their number (an arc of up to about 150° either side of
+#: its middle): beyond that it wraps round the object and has no one side to hold
+#: along (:func:`_side_hold`).
+WRAPPED_NORMAL = 0.25
 
 
 class _Smoothed(NamedTuple):
@@ -117,7 +125,8 @@ class _Tracks(NamedTuple):
             metres, shape (T,).
         smoothed: each contact's filtered centroid.
         hold: each contact's side hold, the shift of its targets along the side
-            its particles press, metres, (T, 2) (zero without ``proxy.hold_time``).
+            its particles press, metres, world frame, (T, 2) (zero without
+            ``proxy.hold_time``).
     """
 
     ids: NDArray[np.int64]
@@ -242,6 +251,8 @@ class PersistentProxies:
             owner, depth = owner[embodied], depth[embodied]
         else:
             particles, targets, born = particles.copy(), targets.copy(), born.copy()
+        if proxy.penetration_limit:
+            self._limit_penetration(particles, targets, owner, depth)
         if self._hold_gain > 0.0:
             track_of = np.repeat(np.arange(len(tracks.ids)), sizes)
             if self._cull:
@@ -249,8 +260,6 @@ class PersistentProxies:
             # In place, as the culling: the tracks keep the new hold.
             tracks.hold[:] = self._holds_after(tracks.hold, track_of, particles, born, owner, depth)
             targets = targets + tracks.hold[track_of]
-        if proxy.penetration_limit:
-            self._limit_penetration(particles, targets, owner, depth)
         return ProxyCommand(particles, targets, spin, culled=culled, born=born)
 
     # -- stages ------------------------------------------------------------------------
@@ -386,14 +395,15 @@ class PersistentProxies:
         """Each contact's side hold after this frame (step 7 of the module docstring).
 
         A particle counts if its point lies inside an object's footprint, it was
-        not put down this frame and it stands on the table beside the object (not
-        on a top face). Its shortfall is where the hand put it last frame (its last
-        target less its contact's hold then) less where it is; a particle a merged
-        contact inherited was held with its old contact's hold, which for that one
-        frame counts as shortfall.
+        not put down this frame, it stands on the table (not on a top face) and
+        that object is the one nearest it, whose side gives its outward normal
+        (:func:`_side_hold` leaves out those with none). Its shortfall is where the
+        hand put it last frame (its last target less its contact's hold then)
+        less where it is; a particle a merged contact inherited was held with its
+        old contact's hold, which for that one frame counts as shortfall.
 
         Args:
-            hold: each contact's hold before this frame, metres, (T, 2).
+            hold: each contact's hold before this frame, metres, world frame, (T, 2).
             track_of: each row's contact, (K,).
             particles, born: the rows' particle stacks (K, L) and which were put
                 down this frame.
@@ -401,7 +411,7 @@ class PersistentProxies:
                 that depth, metres, negative outside; (K,) each.
 
         Returns:
-            The new holds, metres, (T, 2).
+            The new holds, metres, world frame, (T, 2).
         """
         world = self._world
         pool = world.pool
@@ -409,12 +419,20 @@ class PersistentProxies:
         at = pool.positions(particles[rows, 0])
         low = at[:, 2] < pool.radius + REST_TOLERANCE
         rows, at = rows[low], at[low, :2]
+        # The side a particle presses is its nearest object's; with two objects
+        # close together that may not be the one its point lies in.
+        beside = world.footprint_depth(at)[0] == owner[rows]
+        rows, at = rows[beside], at[beside]
         contact = track_of[rows]
         shortfall = pool.last_targets(particles[rows, 0]) - hold[contact] - at
         outward = world.footprint_normal(at, 2.0 * pool.radius)
         centre = world.object_states().position[owner[rows], :2]
         outward *= np.where(np.einsum("ij,ij->i", at - centre, outward) < 0.0, -1.0, 1.0)[:, None]
-        return _side_hold(hold, self._hold_gain, contact, shortfall, outward)
+        # A grip gives at most its friction times its particles' offset (the
+        # squeeze, up to the penetration margin) before it slips; with an object's
+        # friction of up to 1 that is no more than this.
+        most = self._proxy.particle_friction * self._proxy.penetration_margin
+        return _side_hold(hold, self._hold_gain, contact, shortfall, outward, most)
 
     def _release(self, particles: NDArray[np.int64]) -> None:
         """Give back the particles of some rows of a track (culled rows have none)."""
@@ -695,6 +713,7 @@ def _side_hold(
     contact: NDArray[np.intp],
     shortfall: NDArray[np.float64],
     outward: NDArray[np.float64],
+    most: float = math.inf,
 ) -> NDArray[np.float64]:
     """Each contact's side hold after a frame: the hold plus ``gain`` times its
     particles' mean shortfall along their sides, less the part of that along their
@@ -704,15 +723,23 @@ def _side_hold(
     The squeeze is the law's own and stays out of it twice over: each particle's
     shortfall along its own side's normal is dropped, and so is what is left along
     the contact's mean normal (particles stuck round a curve stand short along the
-    squeeze, which each one's side sees partly along it). A particle with no side
-    normal (by a leaning cylinder) has no side to hold along and does not count.
+    squeeze, which each one's side sees partly along it); what is removed along the
+    mean normal includes the hold's own part there (it is kept in the world frame,
+    and a turning contact's hold turns partly onto its normal). A particle with no
+    side normal (by a leaning cylinder) has no side to hold along and does not
+    count, nor does a contact whose particles' normals nearly cancel (one that wraps
+    round an object has no one side). A hold is at most ``most`` long: a particle
+    kept from its point along the side by something other than friction (another
+    object) would otherwise push it ever farther.
 
     Args:
-        hold: each contact's hold, metres, (T, 2).
+        hold: each contact's hold, metres, world frame, (T, 2).
         gain: the frame over the hold time, at most 1.
         contact: the contact of each particle pressing a side, (N,).
-        shortfall: where the hand put it less where it is, metres, (N, 2).
+        shortfall: where the hand put it less where it is, metres, world frame,
+            (N, 2).
         outward: the side's outward normal there, (N, 2), or a zero row.
+        most: the longest a hold may be, metres.
 
     Returns:
         The new holds, metres, (T, 2).
@@ -730,8 +757,12 @@ def _side_hold(
     lag /= np.maximum(particles, 1)[:, None]
     normal = np.zeros((count, 2))
     np.add.at(normal, contact, outward)
-    normal /= np.maximum(np.hypot(normal[:, 0], normal[:, 1]), 1e-12)[:, None]
-    after[pressed] = _less_along(hold + gain * lag, normal)[pressed]
+    length = np.hypot(normal[:, 0], normal[:, 1])
+    pressed &= length >= WRAPPED_NORMAL * particles
+    normal /= np.maximum(length, 1e-12)[:, None]
+    held = _less_along(hold + gain * lag, normal)
+    held *= np.minimum(1.0, most / np.maximum(np.hypot(held[:, 0], held[:, 1]), 1e-12))[:, None]
+    after[pressed] = held[pressed]
     return after
 
 

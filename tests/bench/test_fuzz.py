@@ -164,7 +164,7 @@ def test_the_named_fast_fuzz_cases_keep_their_record(seed: int) -> None:
 
 
 def test_fuzz_refuses_an_unknown_preset_before_it_plays(monkeypatch: pytest.MonkeyPatch) -> None:
-    def play(seed: int, preset: str = "default") -> fuzz.Outcome:
+    def play(seed: int, preset: str = "default", config: str | None = None) -> fuzz.Outcome:
         raise AssertionError("played an episode")
 
     monkeypatch.setattr(fuzz, "play", play)
@@ -180,6 +180,17 @@ def test_an_episode_takes_a_scene_files_settings(tmp_path: Path) -> None:
     assert held.scene.proxy.hold_time == 0.05 and plain.scene.proxy.hold_time == 0.0
     assert held.scene.objects == plain.scene.objects
     assert held.scene.replace(proxy={"hold_time": 0.0}) == plain.scene
+    # The report names the file, so that a failing seed can be played again.
+    assert "over held.toml" in fuzz.FuzzReport([], 1.0, "reference", "held.toml").text()
+
+
+def test_fuzz_refuses_a_bad_scene_file_before_it_plays(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    def play(seed: int, preset: str = "default", config: str | None = None) -> fuzz.Outcome:
+        raise AssertionError("played an episode")
+
+    monkeypatch.setattr(fuzz, "play", play)
     bad = tmp_path / "bad.toml"
     bad.write_text("[proxy]\nhold = 1\n")
     with pytest.raises(ConfigError, match="hold"):

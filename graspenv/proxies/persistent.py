@@ -148,6 +148,21 @@ class _Tracks(NamedTuple):
         )  # fmt: skip
 
 
+class _Sides(NamedTuple):
+    """The rows of a frame whose points lie inside an object's footprint.
+
+    Attributes:
+        rows: their indices, (N,).
+        at: where their bottom particles are, metres, world frame, (N, 3).
+        normal: the table-plane normal of the nearest object's side at each particle
+            within two particle radii, sign arbitrary, or a zero row, (N, 2).
+    """
+
+    rows: NDArray[np.intp]
+    at: NDArray[np.float64]
+    normal: NDArray[np.float64]
+
+
 class PersistentProxies:
     """Contours to persistent particle stacks.
 
@@ -183,6 +198,10 @@ class PersistentProxies:
         # The share of the particles' shortfall along a side the hold takes up a
         # frame (proxy.hold_time; 0: off).
         self._hold_gain = min(1.0, dt / proxy.hold_time) if proxy.hold_time > 0 else 0.0
+        # The longest a hold may be: a grip gives at most its friction times its
+        # particles' offset (the squeeze, up to the penetration margin) before it
+        # slips, no more than this with an object's friction of up to 1.
+        self._hold_most = proxy.particle_friction * proxy.penetration_margin
 
     def reset(self) -> None:
         self._tracks = _Tracks.empty(self._layers)
@@ -251,14 +270,19 @@ class PersistentProxies:
             owner, depth = owner[embodied], depth[embodied]
         else:
             particles, targets, born = particles.copy(), targets.copy(), born.copy()
+        if proxy.penetration_limit or self._hold_gain > 0.0:
+            sides = self._pressing(particles, owner, depth)
+        lifted = np.zeros(0, np.intp)
         if proxy.penetration_limit:
-            self._limit_penetration(particles, targets, owner, depth)
+            lifted = self._limit_penetration(particles, targets, depth, sides)
         if self._hold_gain > 0.0:
             track_of = np.repeat(np.arange(len(tracks.ids)), sizes)
             if self._cull:
                 track_of = track_of[embodied]
             # In place, as the culling: the tracks keep the new hold.
-            tracks.hold[:] = self._holds_after(tracks.hold, track_of, particles, born, owner, depth)
+            tracks.hold[:] = self._holds_after(
+                tracks.hold, track_of, particles, born, owner, sides, lifted
+            )
             targets = targets + tracks.hold[track_of]
         return ProxyCommand(particles, targets, spin, culled=culled, born=born)
 
@@ -383,6 +407,26 @@ class PersistentProxies:
             np.concatenate([followed.hold, new_hold])[order],
         )
 
+    def _pressing(
+        self, particles: NDArray[np.int64], owner: NDArray[np.int64], depth: NDArray[np.float64]
+    ) -> _Sides:
+        """The rows whose points lie inside an object's footprint, where their bottom
+        particles are and the side each is by (what the penetration limit and the
+        side hold both need, read once).
+
+        Args:
+            particles: particle ids, (K, L) stacks, bottom first.
+            owner, depth: the object whose footprint holds each point deepest and that
+                depth from its nearest side, metres, negative outside; (K,) each
+                (:meth:`~graspenv.physics.world.PhysicsWorld.footprint_depth`).
+        """
+        world = self._world
+        rows = np.flatnonzero((owner >= 0) & (depth > 0.0))
+        at = world.pool.positions(particles[rows, 0])
+        # The nearest footprint's side within two radii of the particle (none at a
+        # disc's centre or by a leaning cylinder).
+        return _Sides(rows, at, world.footprint_normal(at[:, :2], 2.0 * world.pool.radius))
+
     def _holds_after(
         self,
         hold: NDArray[np.float64],
@@ -390,7 +434,8 @@ class PersistentProxies:
         particles: NDArray[np.int64],
         born: NDArray[np.bool_],
         owner: NDArray[np.int64],
-        depth: NDArray[np.float64],
+        sides: _Sides,
+        lifted: NDArray[np.intp],
     ) -> NDArray[np.float64]:
         """Each contact's side hold after this frame (step 7 of the module docstring).
 
@@ -407,32 +452,27 @@ class PersistentProxies:
             track_of: each row's contact, (K,).
             particles, born: the rows' particle stacks (K, L) and which were put
                 down this frame.
-            owner, depth: the object whose footprint holds each point deepest and
-                that depth, metres, negative outside; (K,) each.
+            owner: the object whose footprint holds each point deepest, (K,).
+            sides: the rows inside a footprint (:meth:`_pressing`).
+            lifted: the rows the penetration limit put on a top face this frame.
 
         Returns:
             The new holds, metres, world frame, (T, 2).
         """
         world = self._world
         pool = world.pool
-        rows = np.flatnonzero((owner >= 0) & (depth > 0.0) & ~born)
-        at = pool.positions(particles[rows, 0])
-        low = at[:, 2] < pool.radius + REST_TOLERANCE
-        rows, at = rows[low], at[low, :2]
+        rows, at, outward = sides
+        keep = ~born[rows] & (at[:, 2] < pool.radius + REST_TOLERANCE) & ~np.isin(rows, lifted)
+        rows, at, outward = rows[keep], at[keep, :2], outward[keep]
         # The side a particle presses is its nearest object's; with two objects
         # close together that may not be the one its point lies in.
         beside = world.footprint_depth(at)[0] == owner[rows]
-        rows, at = rows[beside], at[beside]
+        rows, at, outward = rows[beside], at[beside], outward[beside]
         contact = track_of[rows]
         shortfall = pool.last_targets(particles[rows, 0]) - hold[contact] - at
-        outward = world.footprint_normal(at, 2.0 * pool.radius)
         centre = world.object_states().position[owner[rows], :2]
         outward *= np.where(np.einsum("ij,ij->i", at - centre, outward) < 0.0, -1.0, 1.0)[:, None]
-        # A grip gives at most its friction times its particles' offset (the
-        # squeeze, up to the penetration margin) before it slips; with an object's
-        # friction of up to 1 that is no more than this.
-        most = self._proxy.particle_friction * self._proxy.penetration_margin
-        return _side_hold(hold, self._hold_gain, contact, shortfall, outward, most)
+        return _side_hold(hold, self._hold_gain, contact, shortfall, outward, self._hold_most)
 
     def _release(self, particles: NDArray[np.int64]) -> None:
         """Give back the particles of some rows of a track (culled rows have none)."""
@@ -487,9 +527,9 @@ class PersistentProxies:
         self,
         particles: NDArray[np.int64],
         targets: NDArray[np.float64],
-        owner: NDArray[np.int64],
         depth: NDArray[np.float64],
-    ) -> None:
+        sides: _Sides,
+    ) -> NDArray[np.intp]:
         """Lift onto the top face each particle (stack) whose point lies deeper than
         the margin inside an object's footprint while the particle is below the top
         (step 6 of the module docstring).
@@ -497,16 +537,19 @@ class PersistentProxies:
         Args:
             particles: particle ids, (K, L) stacks, bottom first.
             targets: the contour points, metres, world frame, (K, 2).
-            owner, depth: the object whose footprint holds each point deepest and that
-                depth from its nearest side, metres, negative outside; (K,) each
-                (:meth:`~graspenv.physics.world.PhysicsWorld.footprint_depth`).
+            depth: each point's depth in the footprint that holds it deepest, metres,
+                negative outside, (K,).
+            sides: the rows inside a footprint (:meth:`_pressing`).
+
+        Returns:
+            The rows lifted.
         """
         world = self._world
         margin, radius = self._proxy.penetration_margin, world.pool.radius
-        inside = np.flatnonzero((owner >= 0) & (depth > 0.0))
+        inside, at, normal = sides
+        nothing = np.zeros(0, np.intp)
         if inside.size == 0:
-            return
-        at = world.pool.positions(particles[inside, 0])
+            return nothing
         # A point may lie near a side other than the one its particle presses: a
         # finger sliding into a box along an edge keeps its points within the margin
         # of the edge's side while its particles, stopped at the face it entered by,
@@ -518,20 +561,20 @@ class PersistentProxies:
         # a small cylinder lies up to 1.5 mm farther behind its point than the point's
         # depth (7.5 mm on a 6 mm squeeze of a 3 cm cylinder), and lifting it lost
         # the grip (tests/proxies/test_penetration.py).
-        normal = world.footprint_normal(at[:, :2], 2.0 * radius)
         behind = np.abs(np.einsum("ij,ij->i", at[:, :2] - targets[inside], normal)) - radius
         deep = (depth[inside] > margin) | (behind > margin + radius)
         if not np.any(deep):
-            return
+            return nothing
         top = world.ray_heights(targets[inside[deep]]).height + radius
         # A particle already on the top face stays where the physics put it.
         below = at[deep, 2] < top - radius
         if not np.any(below):
-            return
+            return nothing
         rows = inside[deep][below]
         world.pool.place(
             particles[rows].reshape(-1), self._stack_positions(targets[rows], top[below])
         )
+        return rows
 
 
 class _Motion(NamedTuple):
@@ -748,17 +791,17 @@ def _side_hold(
     after = hold * (1.0 - gain)
     sided = np.any(outward != 0.0, axis=1)
     contact, shortfall, outward = contact[sided], shortfall[sided], outward[sided]
-    particles = np.bincount(contact, minlength=count)
-    pressed = particles > 0
+    counts = np.bincount(contact, minlength=count)
+    pressed = counts > 0
     if not np.any(pressed):
         return after
     lag = np.zeros((count, 2))
     np.add.at(lag, contact, _less_along(shortfall, outward))
-    lag /= np.maximum(particles, 1)[:, None]
+    lag /= np.maximum(counts, 1)[:, None]
     normal = np.zeros((count, 2))
     np.add.at(normal, contact, outward)
     length = np.hypot(normal[:, 0], normal[:, 1])
-    pressed &= length >= WRAPPED_NORMAL * particles
+    pressed &= length >= WRAPPED_NORMAL * counts
     normal /= np.maximum(length, 1e-12)[:, None]
     held = _less_along(hold + gain * lag, normal)
     held *= np.minimum(1.0, most / np.maximum(np.hypot(held[:, 0], held[:, 1]), 1e-12))[:, None]

@@ -274,6 +274,12 @@ class CellResult:
     turn_margin: float = math.nan
     slide_margin: float = math.nan
     max_tilt_deg: float = math.nan
+    #: The slip against Coulomb's force at its onset, the push midway between the
+    #: last one held and the first not held, at the settled normal force and at the
+    #: force just before it (the gross slip, ``slip_error_pct``, comes a frame or
+    #: two later: :data:`~graspenv.bench.scenarios.SLIP_ONSET_SPEED`). Not targets.
+    slip_onset_error_pct: float = math.nan
+    slip_onset_then_pct: float = math.nan
 
     @property
     def turn_counted(self) -> bool:
@@ -391,6 +397,8 @@ def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = ""
     slipped = slip_run(base, cell).errors
     result.slip_error_pct = slipped["slip_error_pct"]
     result.slip_error_then_pct = slipped["slip_error_then_pct"]
+    result.slip_onset_error_pct = slipped["slip_onset_error_pct"]
+    result.slip_onset_then_pct = slipped["slip_onset_then_pct"]
     return result
 
 

@@ -8,9 +8,10 @@ Run the grid at each setting with the same seeds, then pair the cells::
 
 For each map and each figure (the turn and the slide in the cells both settings
 count, the slip against Coulomb's force at the settled normal force and at the force
-just before the slip), it gives each setting's mean |error| over the cells both
-measured, the mean of the paired differences (second minus first) with its standard
-error, and how many cells each puts within the target. Pairing cancels what a cell's
+just before the slip, and the same at the slip's onset), it gives each setting's mean
+|error| over the cells both measured, the mean of the paired differences (second
+minus first) with its standard error, and how many cells each puts within the
+target. Pairing cancels what a cell's
 two runs share (the grasp and its place on the table), so a setting's own effect
 shows at a few hundredths of a degree where the cells' errors spread over tenths.
 The placements (``--seed``) are the samples: one seed gives one run of each cell.
@@ -47,6 +48,8 @@ FIGURES: tuple[tuple[str, str, float, str, Callable[[CellResult], bool]], ...] =
     ("slide", "slide_error_pct", SLIDE_TARGET_PCT, "%", lambda r: r.slide_counted),
     ("slip", "slip_error_pct", SLIP_TARGET_PCT, "%", lambda r: True),
     ("slip at the force then", "slip_error_then_pct", SLIP_TARGET_PCT, "%", lambda r: True),
+    ("slip at its onset", "slip_onset_error_pct", SLIP_TARGET_PCT, "%", lambda r: True),
+    ("slip at its onset, force then", "slip_onset_then_pct", SLIP_TARGET_PCT, "%", lambda r: True),
 )
 
 

@@ -79,6 +79,13 @@ SLIP_FRAMES = 900  # the ramp gives up at SLIP_RATE × 15 s = 90 N (the figure i
 #: this speed 4-10 % short of Coulomb's force (README, "Accuracy across the grasp
 #: space"). The grip's mean creeping 0.5 mm is reported too.
 SLIP_SPEED = 0.01
+#: The slip's onset: of the frames before the gross slip, the first of the run
+#: that slid at least this fast from under every particle, m/s. Before the slip
+#: the slowest particle's slide is under 0.1 mm/s on the bench's flat box, and its
+#: onset frame a few mm/s; the gross slip at :data:`SLIP_SPEED` comes a frame or
+#: two later, which puts the slip force that many steps of the push late
+#: (``slip_onset_*`` in :func:`push_until_slip`).
+SLIP_ONSET_SPEED = 0.001
 CREEP_DISTANCE = 0.0005  # metres of creep reported as ``creep_force_n``
 
 
@@ -181,7 +188,10 @@ def push_until_slip(
         ``slip_error_pct``, ``creep_force_n``, ``grip_normal_n`` (settled),
         ``tilt_at_slip_deg``, and ``slip_normal_n`` and ``slip_error_then_pct``:
         the fingers' normal force over the five frames before the slip, and the
-        slip against Coulomb's force from it.
+        slip against Coulomb's force from it; ``slip_onset_force_n``,
+        ``slip_onset_error_pct`` and ``slip_onset_then_pct``: the same at the
+        slip's onset (:data:`SLIP_ONSET_SPEED`), the push midway between the last
+        one held and the first not held.
     """
     settle = 20
     script = pinch(
@@ -211,7 +221,7 @@ def push_until_slip(
 
     state: dict[str, Any] = {
         "normal": [], "table": [], "ramp_normal": [], "start": None, "force": math.nan,
-        "creep": math.nan, "rate": rate, "then": math.nan,
+        "creep": math.nan, "rate": rate, "then": math.nan, "speeds": [], "onset": None,
     }  # fmt: skip
 
     def each(sim: Simulation, index: int, played: Played) -> bool:
@@ -251,12 +261,14 @@ def push_until_slip(
             # creeps with that particle's give (partial slip, module docstring).
             speed = float(np.linalg.norm(apart - state["apart"], axis=1).min()) / dt
             state["apart"] = apart
+            state["speeds"].append(speed)
             if speed > SLIP_SPEED:
                 state["force"] = force
                 state["tilt"] = math.degrees(tilt_angle(sim.object_pose("box")[1]))
                 # The grip's normal force over the frames before the slip (not the
                 # slip's own, whose contacts are breaking).
                 state["then"] = float(np.mean(state["ramp_normal"][-5:]))
+                state["onset"] = _onset(state["speeds"])
                 return True
             state["ramp_normal"].append(float(fingers))
             push = state["rate"] * (index + 2 - ramp_start) * dt
@@ -279,7 +291,30 @@ def push_until_slip(
     if math.isfinite(state["then"]):
         then = predicted(state["then"])
         played.errors["slip_error_then_pct"] = 100 * (state["force"] - then) / then
+    played.errors["slip_onset_force_n"] = math.nan
+    played.errors["slip_onset_error_pct"] = math.nan
+    played.errors["slip_onset_then_pct"] = math.nan
+    if state["onset"] is not None:
+        # The frames count from the ramp's start, whose first frame's push is zero;
+        # a frame's speed comes of the push of the step before it.
+        frame = state["onset"]
+        onset = state["rate"] * (frame - 0.5) * dt
+        played.errors["slip_onset_force_n"] = onset
+        played.errors["slip_onset_error_pct"] = 100 * (onset - coulomb) / coulomb
+        normal = state["ramp_normal"][max(0, frame - 5) : frame]
+        if normal:
+            then = predicted(float(np.mean(normal)))
+            played.errors["slip_onset_then_pct"] = 100 * (onset - then) / then
     return played
+
+
+def _onset(speeds: list[float]) -> int:
+    """The frame (of the ramp's, the last the gross slip's) that began the run of
+    frames sliding at least :data:`SLIP_ONSET_SPEED` which ends in the slip."""
+    frame = len(speeds) - 1
+    while frame > 0 and speeds[frame - 1] >= SLIP_ONSET_SPEED:
+        frame -= 1
+    return frame
 
 
 def flick(base: SceneConfig, offset: Offset = (0.0, 0.0), replays: int = 1) -> Played:

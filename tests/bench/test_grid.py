@@ -37,6 +37,7 @@ def test_the_canonical_cell_off_its_pixels_meets_the_targets(
     assert abs(canonical.turn_error_deg) <= grid.TURN_TARGET_DEG, canonical
     assert abs(canonical.slide_error_pct) <= grid.SLIDE_TARGET_PCT, canonical
     assert math.isfinite(canonical.slip_error_pct)
+    assert canonical.slip_onset_error_pct <= canonical.slip_error_pct
 
 
 def test_margins_follow_coulomb(base: SceneConfig, canonical: grid.CellResult) -> None:
@@ -106,6 +107,7 @@ def test_outputs_round_trip(tmp_path: Path, canonical: grid.CellResult) -> None:
     assert image is not None and image.shape[0] > 100
     assert "| boxes |" in (tmp_path / "grid.md").read_text()
     assert again[0].slip_error_then_pct == pytest.approx(results[0].slip_error_then_pct)
+    assert again[0].slip_onset_then_pct == pytest.approx(results[0].slip_onset_then_pct)
     # A grid.csv from before a column was added reads it as NaN.
     old = tmp_path / "old.csv"
     with (tmp_path / "grid.csv").open() as f:

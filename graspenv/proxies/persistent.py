@@ -51,8 +51,11 @@ real fingertip. One camera frame:
    its particles press, the integral of how far they stood behind the hand along
    it, over the hold time: a fingertip is rigid, so under a steady load along the
    side its particles stay where the hand puts them instead of giving by the load
-   over the law's stiffness (:func:`_side_hold`). A contact that presses no side
-   lets its hold go at the same rate. Particles put down this frame start at their
+   over the law's stiffness (:mod:`graspenv.proxies.side_hold`). What each frame
+   adds is the part of the shortfalls that one rigid motion of each object
+   explains, fitted to all the particles pressing it, so that the contacts on one
+   object cannot wind up against each other. A contact that presses no side lets
+   its hold go at the same rate. Particles put down this frame start at their
    points and reach the shifted targets in the frame.
 
 With ``track_hand_rotation`` and ``predicted_resampling`` both off this is the
@@ -62,7 +65,6 @@ paper's plain form: the raw previous contour matched against the tracker's conto
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numpy as np
@@ -77,6 +79,7 @@ from graspenv.jit import njit
 from graspenv.physics.control import REST_TOLERANCE
 from graspenv.physics.world import PhysicsWorld
 from graspenv.proxies.base import ProxyCommand, rotation_kernel
+from graspenv.proxies.side_hold import side_hold
 
 __all__ = ["PersistentProxies"]
 
@@ -86,12 +89,6 @@ __all__ = ["PersistentProxies"]
 #: contour that grew by a point. At 2 mm spacing, two spacings put points of a
 #: sliding grip's leading edge down too (the slide's error 0.27 -> 0.88 mm).
 FAR_FROM_ANCHOR = 2.0
-
-#: The side hold counts a contact only where its particles' side normals add up to
-#: at least this share of their number (an arc of up to about 150° either side of
-#: its middle): beyond that it wraps round the object and has no one side to hold
-#: along (:func:`_side_hold`).
-WRAPPED_NORMAL = 0.25
 
 
 class _Smoothed(NamedTuple):
@@ -442,10 +439,11 @@ class PersistentProxies:
         A particle counts if its point lies inside an object's footprint, it was
         not put down this frame, it stands on the table (not on a top face) and
         that object is the one nearest it, whose side gives its outward normal
-        (:func:`_side_hold` leaves out those with none). Its shortfall is where the
-        hand put it last frame (its last target less its contact's hold then)
-        less where it is; a particle a merged contact inherited was held with its
-        old contact's hold, which for that one frame counts as shortfall.
+        (:func:`~graspenv.proxies.side_hold.side_hold` leaves out those with none).
+        Its shortfall is where the hand put it last frame (its last target less its
+        contact's hold then) less where it is; a particle a merged contact
+        inherited was held with its old contact's hold, which for that one frame
+        counts as shortfall.
 
         Args:
             hold: each contact's hold before this frame, metres, world frame, (T, 2).
@@ -470,9 +468,12 @@ class PersistentProxies:
         rows, at, outward = rows[beside], at[beside], outward[beside]
         contact = track_of[rows]
         shortfall = pool.last_targets(particles[rows, 0]) - hold[contact] - at
-        centre = world.object_states().position[owner[rows], :2]
-        outward *= np.where(np.einsum("ij,ij->i", at - centre, outward) < 0.0, -1.0, 1.0)[:, None]
-        return _side_hold(hold, self._hold_gain, contact, shortfall, outward, self._hold_most)
+        body = owner[rows]
+        arm = at - world.object_states().position[body, :2]
+        outward *= np.where(np.einsum("ij,ij->i", arm, outward) < 0.0, -1.0, 1.0)[:, None]
+        return side_hold(
+            hold, self._hold_gain, contact, shortfall, outward, body, arm, self._hold_most
+        )
 
     def _release(self, particles: NDArray[np.int64]) -> None:
         """Give back the particles of some rows of a track (culled rows have none)."""
@@ -748,71 +749,6 @@ def _alpha_beta(
         rate[k, 0] = velocity[k, 0] + beta * sx
         rate[k, 1] = velocity[k, 1] + beta * sy
     return smoothed, rate
-
-
-def _side_hold(
-    hold: NDArray[np.float64],
-    gain: float,
-    contact: NDArray[np.intp],
-    shortfall: NDArray[np.float64],
-    outward: NDArray[np.float64],
-    most: float = math.inf,
-) -> NDArray[np.float64]:
-    """Each contact's side hold after a frame: the hold plus ``gain`` times its
-    particles' mean shortfall along their sides, less the part of that along their
-    mean outward normal; a contact with no particle on a side lets its hold go by
-    the same share.
-
-    The squeeze is the law's own and stays out of it twice over: each particle's
-    shortfall along its own side's normal is dropped, and so is what is left along
-    the contact's mean normal (particles stuck round a curve stand short along the
-    squeeze, which each one's side sees partly along it); what is removed along the
-    mean normal includes the hold's own part there (it is kept in the world frame,
-    and a turning contact's hold turns partly onto its normal). A particle with no
-    side normal (by a leaning cylinder) has no side to hold along and does not
-    count, nor does a contact whose particles' normals nearly cancel (one that wraps
-    round an object has no one side). A hold is at most ``most`` long: a particle
-    kept from its point along the side by something other than friction (another
-    object) would otherwise push it ever farther.
-
-    Args:
-        hold: each contact's hold, metres, world frame, (T, 2).
-        gain: the frame over the hold time, at most 1.
-        contact: the contact of each particle pressing a side, (N,).
-        shortfall: where the hand put it less where it is, metres, world frame,
-            (N, 2).
-        outward: the side's outward normal there, (N, 2), or a zero row.
-        most: the longest a hold may be, metres.
-
-    Returns:
-        The new holds, metres, (T, 2).
-    """
-    count = len(hold)
-    after = hold * (1.0 - gain)
-    sided = np.any(outward != 0.0, axis=1)
-    contact, shortfall, outward = contact[sided], shortfall[sided], outward[sided]
-    counts = np.bincount(contact, minlength=count)
-    pressed = counts > 0
-    if not np.any(pressed):
-        return after
-    lag = np.zeros((count, 2))
-    np.add.at(lag, contact, _less_along(shortfall, outward))
-    lag /= np.maximum(counts, 1)[:, None]
-    normal = np.zeros((count, 2))
-    np.add.at(normal, contact, outward)
-    length = np.hypot(normal[:, 0], normal[:, 1])
-    pressed &= length >= WRAPPED_NORMAL * counts
-    normal /= np.maximum(length, 1e-12)[:, None]
-    held = _less_along(hold + gain * lag, normal)
-    held *= np.minimum(1.0, most / np.maximum(np.hypot(held[:, 0], held[:, 1]), 1e-12))[:, None]
-    after[pressed] = held[pressed]
-    return after
-
-
-def _less_along(vectors: NDArray[np.float64], unit: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Each row of ``vectors`` less its part along the same row of ``unit`` (a unit
-    vector or zero), shape (N, 2)."""
-    return vectors - np.einsum("ij,ij->i", vectors, unit)[:, None] * unit
 
 
 @njit

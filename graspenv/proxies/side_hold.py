@@ -1,0 +1,143 @@
+"""The side hold (``proxy.hold_time``; step 7 of :mod:`graspenv.proxies.persistent`).
+
+A fingertip is rigid: under a steady load along an object's side its particles
+should stay where the hand puts them, not give by the load over the contact law's
+stiffness. Each frame the particles pressing a side are compared with where the
+hand put them; the part of their shortfalls along the sides that one rigid motion
+of each object explains is integrated into a per-contact offset of the targets
+(README, "The side hold"; docs/design.md, section 3b).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["WRAPPED_NORMAL", "less_along", "rigid_part", "side_hold"]
+
+#: The side hold counts a contact only where its particles' side normals add up to
+#: at least this share of their number (an arc of up to about 150° either side of
+#: its middle): beyond that it wraps round the object and has no one side to hold
+#: along (:func:`side_hold`).
+WRAPPED_NORMAL = 0.25
+
+
+def side_hold(
+    hold: NDArray[np.float64],
+    gain: float,
+    contact: NDArray[np.intp],
+    shortfall: NDArray[np.float64],
+    outward: NDArray[np.float64],
+    body: NDArray[np.intp],
+    arm: NDArray[np.float64],
+    most: float = math.inf,
+) -> NDArray[np.float64]:
+    """Each contact's side hold after a frame: the hold plus ``gain`` times its
+    particles' mean shortfall along their sides as one rigid motion of each object
+    explains it (:func:`rigid_part`), less the part of that along the contact's
+    mean outward normal; a contact with no particle on a side lets its hold go by
+    the same share.
+
+    The squeeze is the law's own and stays out of it twice over: each particle's
+    shortfall along its own side's normal is dropped, and so is what is left along
+    the contact's mean normal (particles stuck round a curve stand short along the
+    squeeze, which each one's side sees partly along it); what is removed along the
+    mean normal includes the hold's own part there (it is kept in the world frame,
+    and a turning contact's hold turns partly onto its normal). A particle with no
+    side normal (by a leaning cylinder) has no side to hold along and does not
+    count, nor does a contact whose particles' normals nearly cancel (one that wraps
+    round an object has no one side). The fit to a rigid motion keeps the contacts
+    on one object from winding up against each other in what the object cannot do
+    (two fingers on one face holding apart, a stretch along it). A hold is at
+    most ``most`` long: a particle kept from its point along the side by something
+    other than friction (another object) would otherwise push it ever farther.
+
+    Args:
+        hold: each contact's hold, metres, world frame, (T, 2).
+        gain: the frame over the hold time, at most 1.
+        contact: the contact of each particle pressing a side, (N,).
+        shortfall: where the hand put it less where it is, metres, world frame,
+            (N, 2).
+        outward: the side's outward normal there, (N, 2), or a zero row.
+        body: the object whose side it presses, (N,).
+        arm: where it is less that object's centre, metres, world frame, (N, 2).
+        most: the longest a hold may be, metres.
+
+    Returns:
+        The new holds, metres, (T, 2).
+    """
+    count = len(hold)
+    after = hold * (1.0 - gain)
+    sided = np.any(outward != 0.0, axis=1)
+    counts = np.bincount(contact[sided], minlength=count)
+    normal = np.zeros((count, 2))
+    np.add.at(normal, contact[sided], outward[sided])
+    length = np.hypot(normal[:, 0], normal[:, 1])
+    pressed = (counts > 0) & (length >= WRAPPED_NORMAL * counts)
+    if not np.any(pressed):
+        return after
+    use = sided & pressed[contact]
+    contact = contact[use]
+    along = rigid_part(body[use], arm[use], less_along(shortfall[use], outward[use]), outward[use])
+    lag = np.zeros((count, 2))
+    np.add.at(lag, contact, along)
+    lag /= np.maximum(counts, 1)[:, None]
+    normal /= np.maximum(length, 1e-12)[:, None]
+    held = less_along(hold + gain * lag, normal)
+    held *= np.minimum(1.0, most / np.maximum(np.hypot(held[:, 0], held[:, 1]), 1e-12))[:, None]
+    after[pressed] = held[pressed]
+    return after
+
+
+def rigid_part(
+    body: NDArray[np.intp],
+    arm: NDArray[np.float64],
+    along: NDArray[np.float64],
+    outward: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """The part of the particles' shortfalls along their sides that one rigid motion
+    of each object (a shift in the table plane and a turn about its centre) explains:
+    the least-squares fit of each object's shortfalls, each seen along its own side.
+
+    Each side sees a shift through its tangent and a turn as the tangent's share of
+    the arm's perpendicular. The fitted values are the projection of the shortfalls
+    onto the motions the sides can see, unique where the motion itself is not (a
+    single flat face cannot tell a shift along it from a turn); that is their mean
+    along one flat face.
+
+    Args:
+        body: each particle's object, (N,).
+        arm: where it is less that object's centre, metres, world frame, (N, 2).
+        along: its shortfall along its side, metres, world frame, (N, 2).
+        outward: its side's unit outward normal, (N, 2).
+
+    Returns:
+        The fitted shortfalls along the sides, metres, world frame, (N, 2).
+    """
+    tangent = np.column_stack([-outward[:, 1], outward[:, 0]])
+    objects, body = np.unique(body, return_inverse=True)
+    # The turn's column in units of each object's arms, so that a relative cut of
+    # the normal matrix's eigenvalues treats a shift and a turn alike.
+    reach = np.zeros(len(objects))
+    np.add.at(reach, body, np.einsum("ij,ij->i", arm, arm))
+    reach = np.sqrt(reach / np.bincount(body)) + 1e-12
+    turn = (tangent[:, 1] * arm[:, 0] - tangent[:, 0] * arm[:, 1]) / reach[body]
+    seen = np.column_stack([tangent, turn])  # each row: how the side sees (dx, dy, turn)
+    size = np.einsum("ij,ij->i", along, tangent)
+    normal_matrix = np.zeros((len(objects), 3, 3))
+    np.add.at(normal_matrix, body, seen[:, :, None] * seen[:, None, :])
+    moment = np.zeros((len(objects), 3))
+    np.add.at(moment, body, seen * size[:, None])
+    motion = np.einsum(
+        "oij,oj->oi", np.linalg.pinv(normal_matrix, rcond=1e-9, hermitian=True), moment
+    )
+    fitted = np.einsum("ij,ij->i", seen, motion[body])
+    return fitted[:, None] * tangent
+
+
+def less_along(vectors: NDArray[np.float64], unit: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Each row of ``vectors`` less its part along the same row of ``unit`` (a unit
+    vector or zero), shape (N, 2)."""
+    return vectors - np.einsum("ij,ij->i", vectors, unit)[:, None] * unit

@@ -335,11 +335,13 @@ class ProxyConfig:
             :mod:`graspenv.proxies.persistent`). Without it a grip gives along the
             side by its load over the law's stiffness, up to the friction coefficient
             times the squeeze depth before it slips, and on a curved side that give
-            costs normal force. At 0.05 s and ``reference`` the grid's cylinders
-            slipped within 5 % of Coulomb in 84 of 100 cells instead of 44 and its
-            turns erred 0.085° instead of 0.143° on average, but the two-hand carry
-            ended 1.9 mm off instead of 1.3 and the flat box slipped 1 % beyond
-            Coulomb instead of 0.16 % (README, "The side hold"). A hold time of a
+            costs normal force. Each frame's increments are the rigid motion of
+            each object that best fits its particles' shortfalls. At 0.05 s and
+            ``reference`` the grid's cylinders slipped within 5 % of Coulomb in 79
+            of 100 cells instead of 44, its turns erred 0.086° instead of 0.143° on
+            average and the two-hand carry ended 0.85 mm off instead of 1.27, but
+            under dropout holes the turn errs more than without it (README, "The
+            side hold"). A hold time of a
             frame or less takes up the whole shortfall each frame; only the
             ``persistent`` method has it.
         instant_stride: pixel subsample of the instant method's gradient pixels.

@@ -11,9 +11,9 @@ count, the slip against Coulomb's force at the settled normal force and at the f
 just before the slip, and the same at the slip's onset), it gives each setting's mean
 |error| over the cells both measured, the mean of the paired differences (second
 minus first) with its standard error, and how many cells each puts within the
-target. Pairing cancels what a cell's
-two runs share (the grasp and its place on the table), so a setting's own effect
-shows at a few hundredths of a degree where the cells' errors spread over tenths.
+target. Pairing cancels what a cell's two runs share (the grasp and its place on
+the table), so a setting's own effect shows at a few hundredths of a degree where
+the cells' errors spread over tenths.
 The placements (``--seed``) are the samples: one seed gives one run of each cell.
 
 Prints Markdown; exits 2 if the two sides do not hold the same cells.

@@ -79,8 +79,8 @@ SLIP_FRAMES = 900  # the ramp gives up at SLIP_RATE × 15 s = 90 N (the figure i
 #: this speed 4-10 % short of Coulomb's force (README, "Accuracy across the grasp
 #: space"). The grip's mean creeping 0.5 mm is reported too.
 SLIP_SPEED = 0.01
-#: The slip's onset: of the frames before the gross slip, the first of the run
-#: that slid at least this fast from under every particle, m/s. Before the slip
+#: The slip's onset: of the frames up to and including the gross slip, the first
+#: of the run that slid at least this fast from under every particle, m/s. Before the slip
 #: the slowest particle's slide is under 0.1 mm/s on the bench's flat box, and its
 #: onset frame a few mm/s; the gross slip at :data:`SLIP_SPEED` comes a frame or
 #: two later, which puts the slip force that many steps of the push late
@@ -295,8 +295,8 @@ def push_until_slip(
     played.errors["slip_onset_error_pct"] = math.nan
     played.errors["slip_onset_then_pct"] = math.nan
     if state["onset"] is not None:
-        # The frames count from the ramp's start, whose first frame's push is zero;
-        # a frame's speed comes of the push of the step before it.
+        # The frames count from the ramp's start: frame k's slide is under the push
+        # of rate·k·dt (zero in the first), so the last push held is frame - 1's.
         frame = state["onset"]
         onset = state["rate"] * (frame - 0.5) * dt
         played.errors["slip_onset_force_n"] = onset
@@ -309,8 +309,17 @@ def push_until_slip(
 
 
 def _onset(speeds: list[float]) -> int:
-    """The frame (of the ramp's, the last the gross slip's) that began the run of
-    frames sliding at least :data:`SLIP_ONSET_SPEED` which ends in the slip."""
+    """The frame that began the run of frames sliding at least
+    :data:`SLIP_ONSET_SPEED` which ends in the slip.
+
+    Args:
+        speeds: the slowest particle's slide each frame of the ramp, m/s, the last
+            the gross slip's frame.
+
+    Returns:
+        The index of that frame in ``speeds`` (at least 1: the ramp's first frame
+        has no push).
+    """
     frame = len(speeds) - 1
     while frame > 0 and speeds[frame - 1] >= SLIP_ONSET_SPEED:
         frame -= 1

@@ -443,7 +443,8 @@ class PersistentProxies:
         Its shortfall is where the hand put it last frame (its last target less its
         contact's hold then) less where it is; a particle a merged contact
         inherited was held with its old contact's hold, which for that one frame
-        counts as shortfall.
+        counts as shortfall (and, through the fit, in the other contacts on the
+        same object).
 
         Args:
             hold: each contact's hold before this frame, metres, world frame, (T, 2).
@@ -464,13 +465,18 @@ class PersistentProxies:
         rows, at, outward = rows[keep], at[keep, :2], outward[keep]
         # The side a particle presses is its nearest object's; with two objects
         # close together that may not be the one its point lies in.
-        beside = world.footprint_depth(at)[0] == owner[rows]
-        rows, at, outward = rows[beside], at[beside], outward[beside]
+        nearest, off = world.footprint_depth(at)
+        beside = nearest == owner[rows]
+        rows, at, outward, off = rows[beside], at[beside], outward[beside], off[beside]
         contact = track_of[rows]
         shortfall = pool.last_targets(particles[rows, 0]) - hold[contact] - at
         body = owner[rows]
         arm = at - world.object_states().position[body, :2]
         outward *= np.where(np.einsum("ij,ij->i", arm, outward) < 0.0, -1.0, 1.0)[:, None]
+        # The arm to the particle's point on the side, not to its centre: particles
+        # on one face press in to depths a few micrometres apart, and seen from
+        # their centres the face would tell a turn from a shift along it.
+        arm += off[:, None] * outward
         return side_hold(
             hold, self._hold_gain, contact, shortfall, outward, body, arm, self._hold_most
         )

@@ -50,7 +50,9 @@ def side_hold(
     count, nor does a contact whose particles' normals nearly cancel (one that wraps
     round an object has no one side). The fit to a rigid motion keeps the contacts
     on one object from winding up against each other in what the object cannot do
-    (two fingers on one face holding apart, a stretch along it). A hold is at
+    (two fingers on one flat face holding apart, a stretch along it; on a round side
+    a shift across the contacts is seen along it, and most of such a stretch
+    stays). A hold is at
     most ``most`` long: a particle kept from its point along the side by something
     other than friction (another object) would otherwise push it ever farther.
 
@@ -60,9 +62,11 @@ def side_hold(
         contact: the contact of each particle pressing a side, (N,).
         shortfall: where the hand put it less where it is, metres, world frame,
             (N, 2).
-        outward: the side's outward normal there, (N, 2), or a zero row.
+        outward: the side's unit normal there, pointing away from the object's
+            centre (the wrap test needs that), (N, 2), or a zero row.
         body: the object whose side it presses, (N,).
-        arm: where it is less that object's centre, metres, world frame, (N, 2).
+        arm: its point on that side less the object's centre, metres, world frame,
+            (N, 2).
         most: the longest a hold may be, metres.
 
     Returns:
@@ -80,7 +84,7 @@ def side_hold(
         return after
     use = sided & pressed[contact]
     contact = contact[use]
-    along = rigid_part(body[use], arm[use], less_along(shortfall[use], outward[use]), outward[use])
+    along = rigid_part(body[use], arm[use], shortfall[use], outward[use])
     lag = np.zeros((count, 2))
     np.add.at(lag, contact, along)
     lag /= np.maximum(counts, 1)[:, None]
@@ -94,7 +98,7 @@ def side_hold(
 def rigid_part(
     body: NDArray[np.intp],
     arm: NDArray[np.float64],
-    along: NDArray[np.float64],
+    shortfall: NDArray[np.float64],
     outward: NDArray[np.float64],
 ) -> NDArray[np.float64]:
     """The part of the particles' shortfalls along their sides that one rigid motion
@@ -105,12 +109,16 @@ def rigid_part(
     the arm's perpendicular. The fitted values are the projection of the shortfalls
     onto the motions the sides can see, unique where the motion itself is not (a
     single flat face cannot tell a shift along it from a turn); that is their mean
-    along one flat face.
+    along one flat face, whose arms (to points on the face) all reach it alike. On a
+    round side a shift across the contacts is seen along the side too, so two
+    contacts on a cylinder pulled apart along it keep most of their shortfalls.
 
     Args:
         body: each particle's object, (N,).
-        arm: where it is less that object's centre, metres, world frame, (N, 2).
-        along: its shortfall along its side, metres, world frame, (N, 2).
+        arm: its point on the side less that object's centre, metres, world frame,
+            (N, 2).
+        shortfall: where the hand put it less where it is, metres, world frame,
+            (N, 2); only its part along the side counts.
         outward: its side's unit outward normal, (N, 2).
 
     Returns:
@@ -125,7 +133,7 @@ def rigid_part(
     reach = np.sqrt(reach / np.bincount(body)) + 1e-12
     turn = (tangent[:, 1] * arm[:, 0] - tangent[:, 0] * arm[:, 1]) / reach[body]
     seen = np.column_stack([tangent, turn])  # each row: how the side sees (dx, dy, turn)
-    size = np.einsum("ij,ij->i", along, tangent)
+    size = np.einsum("ij,ij->i", shortfall, tangent)
     normal_matrix = np.zeros((len(objects), 3, 3))
     np.add.at(normal_matrix, body, seen[:, :, None] * seen[:, None, :])
     moment = np.zeros((len(objects), 3))

@@ -13,7 +13,7 @@ import pytest
 from graspenv.bench.interactions import BOX, pinch, with_objects
 from graspenv.config import ConfigError, ObjectConfig, ProxyConfig, load_config
 from graspenv.proxies.persistent import PersistentProxies
-from graspenv.proxies.side_hold import side_hold
+from graspenv.proxies.side_hold import less_along, rigid_part, side_hold
 from graspenv.simulation import Simulation
 from graspenv.surface.render import render_mask
 from graspenv.surface.shapes import Fingertip
@@ -259,6 +259,8 @@ def test_each_contact_keeps_its_own_hold_as_others_come_and_go() -> None:
         "d": Fingertip(np.array([0.0, 0.05]), radii=(0.008, 0.008)),
     }
     with Simulation(scene) as sim:
+        # The holds are the proxies' own state, not part of the public interface:
+        # the test reads and sets them to check the bookkeeping directly.
         proxies = sim._proxies
         assert isinstance(proxies, PersistentProxies)
         gain = sim.surface.dt / 0.05
@@ -288,3 +290,21 @@ def test_each_contact_keeps_its_own_hold_as_others_come_and_go() -> None:
         (survivor,) = set(merged) - {new}
         assert survivor in (ids[0], ids[2])
         np.testing.assert_allclose(merged[survivor], (1.0 - gain) * kept[survivor], atol=1e-15)
+
+
+def test_on_a_cylinder_the_fit_is_the_least_squares_rigid_motion() -> None:
+    """Two fingers on a 3 cm cylinder, each an arc of five particles, with scattered
+    shortfalls: round sides see a shift three ways, and the fit is the direct
+    least-squares shift and turn (its part along each particle's side)."""
+    rng = np.random.default_rng(3)
+    angles = np.radians(np.concatenate([np.linspace(-30, 30, 5), np.linspace(150, 210, 5)]))
+    outward = np.column_stack([np.cos(angles), np.sin(angles)])
+    arm = 0.03 * outward
+    shortfall = rng.normal(0.0, 0.0005, (10, 2))
+    fitted = rigid_part(np.zeros(10, np.intp), arm, shortfall, outward)
+    tangent = np.column_stack([-outward[:, 1], outward[:, 0]])
+    seen = np.column_stack([tangent, tangent[:, 1] * arm[:, 0] - tangent[:, 0] * arm[:, 1]])
+    motion = np.linalg.lstsq(seen, np.einsum("ij,ij->i", shortfall, tangent), rcond=None)[0]
+    np.testing.assert_allclose(fitted, (seen @ motion)[:, None] * tangent, atol=1e-15)
+    # Not each particle's own: the scatter is not a rigid motion.
+    assert np.abs(fitted - less_along(shortfall, outward)).max() > 1e-4

@@ -341,9 +341,8 @@ class ProxyConfig:
             of 100 cells instead of 44, its turns erred 0.086° instead of 0.143° on
             average and the two-hand carry ended 0.85 mm off instead of 1.27, but
             under dropout holes the turn errs more than without it (README, "The
-            side hold"). A hold time of a
-            frame or less takes up the whole shortfall each frame; only the
-            ``persistent`` method has it.
+            side hold"). A hold time of a frame or less takes up the whole
+            shortfall each frame; only the ``persistent`` method has it.
         instant_stride: pixel subsample of the instant method's gradient pixels.
         rigid_height: height of the rigid method's contact bodies, metres.
     """

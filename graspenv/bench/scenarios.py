@@ -80,9 +80,9 @@ SLIP_FRAMES = 900  # the ramp gives up at SLIP_RATE × 15 s = 90 N (the figure i
 #: space"). The grip's mean creeping 0.5 mm is reported too.
 SLIP_SPEED = 0.01
 #: The slip's onset: of the frames up to and including the gross slip, the first
-#: of the run that slid at least this fast from under every particle, m/s. Before the slip
-#: the slowest particle's slide is under 0.1 mm/s on the bench's flat box, and its
-#: onset frame a few mm/s; the gross slip at :data:`SLIP_SPEED` comes a frame or
+#: of the run that slid at least this fast from under every particle, m/s. Before
+#: the slip the slowest particle's slide is under 0.1 mm/s on the bench's flat box,
+#: and its onset frame a few mm/s; the gross slip at :data:`SLIP_SPEED` comes a frame or
 #: two later, which puts the slip force that many steps of the push late
 #: (``slip_onset_*`` in :func:`push_until_slip`).
 SLIP_ONSET_SPEED = 0.001
@@ -221,7 +221,7 @@ def push_until_slip(
 
     state: dict[str, Any] = {
         "normal": [], "table": [], "ramp_normal": [], "start": None, "force": math.nan,
-        "creep": math.nan, "rate": rate, "then": math.nan, "speeds": [], "onset": None,
+        "creep": math.nan, "rate": rate, "speeds": [],
     }  # fmt: skip
 
     def each(sim: Simulation, index: int, played: Played) -> bool:
@@ -265,10 +265,6 @@ def push_until_slip(
             if speed > SLIP_SPEED:
                 state["force"] = force
                 state["tilt"] = math.degrees(tilt_angle(sim.object_pose("box")[1]))
-                # The grip's normal force over the frames before the slip (not the
-                # slip's own, whose contacts are breaking).
-                state["then"] = float(np.mean(state["ramp_normal"][-5:]))
-                state["onset"] = _onset(state["speeds"])
                 return True
             state["ramp_normal"].append(float(fingers))
             push = state["rate"] * (index + 2 - ramp_start) * dt
@@ -277,35 +273,47 @@ def push_until_slip(
 
     played = play(scene, script, ["box"], (), each_frame=each)
     coulomb = predicted()
-    played.errors["grip_normal_n"] = float(np.mean(state["normal"]))
-    played.errors["tilt_at_slip_deg"] = state.get("tilt", math.nan)
-    played.errors["slip_force_n"] = state["force"]
-    played.errors["coulomb_force_n"] = coulomb
-    played.errors["slip_error_pct"] = 100 * (state["force"] - coulomb) / coulomb
-    played.errors["creep_force_n"] = state["creep"]
-    # Coulomb's law at the normal force the grip had just before the slip: the grip
-    # gives before it slips, and round a curved side that costs normal force.
-    played.errors["slip_normal_n"] = state["then"]
-    played.errors["slip_error_then_pct"] = math.nan
+
+    def against(force: float, frame: int) -> tuple[float, float, float]:
+        # ``force`` against Coulomb's at the settled normal force and at the grip's
+        # normal force over the five frames before ``frame`` of the ramp (not the
+        # slip's own, whose contacts are breaking), and that normal force.
+        normal = state["ramp_normal"][max(0, frame - 5) : frame]
+        if not normal:
+            return _percent(force, coulomb), math.nan, math.nan
+        then = float(np.mean(normal))
+        return _percent(force, coulomb), _percent(force, predicted(then)), then
+
+    errors = played.errors
+    errors["grip_normal_n"] = float(np.mean(state["normal"]))
+    errors["tilt_at_slip_deg"] = state.get("tilt", math.nan)
+    errors["slip_force_n"] = state["force"]
+    errors["coulomb_force_n"] = coulomb
     # No figure where no particle gripped it (rigid proxies) or it never slipped.
-    if math.isfinite(state["then"]):
-        then = predicted(state["then"])
-        played.errors["slip_error_then_pct"] = 100 * (state["force"] - then) / then
-    played.errors["slip_onset_force_n"] = math.nan
-    played.errors["slip_onset_error_pct"] = math.nan
-    played.errors["slip_onset_then_pct"] = math.nan
-    if state["onset"] is not None:
+    nan = math.nan
+    errors.update(
+        slip_error_pct=nan, creep_force_n=state["creep"], slip_normal_n=nan,
+        slip_error_then_pct=nan, slip_onset_force_n=nan, slip_onset_error_pct=nan,
+        slip_onset_then_pct=nan,
+    )  # fmt: skip
+    if math.isfinite(state["force"]):
+        # Coulomb's law at the normal force the grip had just before the slip too:
+        # the grip gives before it slips, and round a curved side that costs
+        # normal force. The last frame of the ramp is the slip's.
+        figures = against(state["force"], len(state["speeds"]) - 1)
+        errors["slip_error_pct"], errors["slip_error_then_pct"], errors["slip_normal_n"] = figures
         # The frames count from the ramp's start: frame k's slide is under the push
         # of rate·k·dt (zero in the first), so the last push held is frame - 1's.
-        frame = state["onset"]
+        frame = _onset(state["speeds"])
         onset = state["rate"] * (frame - 0.5) * dt
-        played.errors["slip_onset_force_n"] = onset
-        played.errors["slip_onset_error_pct"] = 100 * (onset - coulomb) / coulomb
-        normal = state["ramp_normal"][max(0, frame - 5) : frame]
-        if normal:
-            then = predicted(float(np.mean(normal)))
-            played.errors["slip_onset_then_pct"] = 100 * (onset - then) / then
+        errors["slip_onset_force_n"] = onset
+        errors["slip_onset_error_pct"], errors["slip_onset_then_pct"], _ = against(onset, frame)
     return played
+
+
+def _percent(force: float, reference: float) -> float:
+    """``force`` against ``reference``, per cent."""
+    return 100 * (force - reference) / reference
 
 
 def _onset(speeds: list[float]) -> int:

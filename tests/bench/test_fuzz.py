@@ -163,11 +163,12 @@ def test_the_named_fast_fuzz_cases_keep_their_record(seed: int) -> None:
     assert fuzz.play(seed, preset="fast").broken == FAST_RECORD[seed]
 
 
-def test_fuzz_refuses_an_unknown_preset_before_it_plays(monkeypatch: pytest.MonkeyPatch) -> None:
-    def play(seed: int, preset: str = "default", config: str | None = None) -> fuzz.Outcome:
-        raise AssertionError("played an episode")
+def _must_not_play(seed: int, preset: str = "default", config: str | None = None) -> fuzz.Outcome:
+    raise AssertionError("played an episode")
 
-    monkeypatch.setattr(fuzz, "play", play)
+
+def test_fuzz_refuses_an_unknown_preset_before_it_plays(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(fuzz, "play", _must_not_play)
     with pytest.raises(ValueError, match="fidelity must be one of"):
         fuzz.run_fuzz(1, preset="fastest")
 
@@ -187,10 +188,7 @@ def test_an_episode_takes_a_scene_files_settings(tmp_path: Path) -> None:
 def test_fuzz_refuses_a_bad_scene_file_before_it_plays(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    def play(seed: int, preset: str = "default", config: str | None = None) -> fuzz.Outcome:
-        raise AssertionError("played an episode")
-
-    monkeypatch.setattr(fuzz, "play", play)
+    monkeypatch.setattr(fuzz, "play", _must_not_play)
     bad = tmp_path / "bad.toml"
     bad.write_text("[proxy]\nhold = 1\n")
     with pytest.raises(ConfigError, match="hold"):

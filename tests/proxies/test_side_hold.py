@@ -40,6 +40,15 @@ def _hold(
     return side_hold(hold, GAIN, contact, shortfall, outward, body, arm, most)
 
 
+def _least_squares(arm: np.ndarray, shortfall: np.ndarray, outward: np.ndarray) -> np.ndarray:
+    """The rigid fit solved directly for one object: the least-squares shift and
+    turn of the shortfalls seen along each side, and what each side sees of it."""
+    tangent = np.column_stack([-outward[:, 1], outward[:, 0]])
+    seen = np.column_stack([tangent, tangent[:, 1] * arm[:, 0] - tangent[:, 0] * arm[:, 1]])
+    motion = np.linalg.lstsq(seen, np.einsum("ij,ij->i", shortfall, tangent), rcond=None)[0]
+    return (seen @ motion)[:, None] * tangent
+
+
 def test_the_hold_takes_up_the_shortfall_along_the_side_only() -> None:
     # Contact 0: three particles on a flat side facing -x, each 0.4 mm short along
     # the side (+y) and 2 mm along the squeeze (+x, into the object). Contact 2: two
@@ -128,11 +137,7 @@ def test_uneven_shortfalls_on_a_box_keep_their_rigid_part() -> None:
     arm = np.array([[-0.03, -0.01], [-0.03, 0.015], [0.005, 0.03]])
     shortfall = np.array([[0.001, 0.0002], [0.002, 0.0006], [-0.0003, -0.001]])
     hold = _hold(np.zeros((3, 2)), np.arange(3), shortfall, outward, arm)
-    tangent = np.column_stack([-outward[:, 1], outward[:, 0]])
-    seen = np.column_stack([tangent, tangent[:, 1] * arm[:, 0] - tangent[:, 0] * arm[:, 1]])
-    motion = np.linalg.lstsq(seen, np.einsum("ij,ij->i", shortfall, tangent), rcond=None)[0]
-    expected = GAIN * (seen @ motion)[:, None] * tangent
-    np.testing.assert_allclose(hold, expected, atol=1e-15)
+    np.testing.assert_allclose(hold, GAIN * _least_squares(arm, shortfall, outward), atol=1e-15)
     # A face sees a shift along it and a turn alike, so the two fingers on it hold
     # their mean; the third, on another face, holds its own.
     np.testing.assert_allclose(
@@ -302,9 +307,6 @@ def test_on_a_cylinder_the_fit_is_the_least_squares_rigid_motion() -> None:
     arm = 0.03 * outward
     shortfall = rng.normal(0.0, 0.0005, (10, 2))
     fitted = rigid_part(np.zeros(10, np.intp), arm, shortfall, outward)
-    tangent = np.column_stack([-outward[:, 1], outward[:, 0]])
-    seen = np.column_stack([tangent, tangent[:, 1] * arm[:, 0] - tangent[:, 0] * arm[:, 1]])
-    motion = np.linalg.lstsq(seen, np.einsum("ij,ij->i", shortfall, tangent), rcond=None)[0]
-    np.testing.assert_allclose(fitted, (seen @ motion)[:, None] * tangent, atol=1e-15)
+    np.testing.assert_allclose(fitted, _least_squares(arm, shortfall, outward), atol=1e-15)
     # Not each particle's own: the scatter is not a rigid motion.
     assert np.abs(fitted - less_along(shortfall, outward)).max() > 1e-4

@@ -301,17 +301,18 @@ def footprint_normals(
     rotations: NDArray[np.float64],
     near: float,
 ) -> NDArray[np.float64]:
-    """The table-plane normal of the nearest object's side at each point: the normal
-    of the box shadow's edge nearest the point, or the radial direction of a sphere's
-    or an upright cylinder's disc (:func:`footprint_depths` says which object is
-    nearest and how deep the point lies).
+    """The table-plane outward normal of the nearest object's side at each point: the
+    normal of the box shadow's edge nearest the point, or the radial direction of a
+    sphere's or an upright cylinder's disc (:func:`footprint_depths` says which object
+    is nearest and how deep the point lies).
 
     Args:
         points, shapes, sizes, positions, rotations: as :func:`footprint_depths`.
         near: points farther outside every footprint than this, metres, get none.
 
     Returns:
-        Unit normals, shape (N, 2), their sign arbitrary; zero where there is none:
+        Unit normals pointing out of the object, shape (N, 2) (on a box's centre line
+        through an edge pair, either of the pair's); zero where there is none:
         a point farther than ``near`` from every object, at a disc's centre, or by a
         leaning cylinder (whose shadow is a hull with no single side to follow).
     """
@@ -332,7 +333,9 @@ def footprint_normals(
             if is_box:
                 nearest = _nearest_edge(normals, reach, count, dx, dy)[1]
                 if nearest >= 0:
-                    out[k, 0], out[k, 1] = normals[nearest, 0], normals[nearest, 1]
+                    nx, ny = normals[nearest, 0], normals[nearest, 1]
+                    sign = -1.0 if dx * nx + dy * ny < 0.0 else 1.0
+                    out[k, 0], out[k, 1] = sign * nx, sign * ny
             else:
                 length = np.hypot(dx, dy)
                 if length > 0.0:

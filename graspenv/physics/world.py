@@ -572,16 +572,16 @@ class PhysicsWorld(Closeable):
         return footprint_depths(*self._footprints(xy))
 
     def footprint_normal(self, xy: ArrayLike, near: float) -> NDArray[np.float64]:
-        """The table-plane normal of the nearest object's side at each point (a box
-        shadow's nearest edge, a disc's radius), zero farther than ``near`` metres
-        outside every footprint (:func:`~graspenv.geometry.footprint_normals`).
+        """The table-plane outward normal of the nearest object's side at each point
+        (a box shadow's nearest edge, a disc's radius), zero farther than ``near``
+        metres outside every footprint (:func:`~graspenv.geometry.footprint_normals`).
 
         Args:
             xy: points, metres, world frame, shape (N, 2).
             near: metres.
 
         Returns:
-            Unit normals, their sign arbitrary, or zero rows, shape (N, 2).
+            Unit normals pointing out of the object, or zero rows, shape (N, 2).
         """
         return footprint_normals(*self._footprints(xy), near)
 

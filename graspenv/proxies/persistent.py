@@ -22,13 +22,15 @@ real fingertip. One camera frame:
    sum-of-squared-distances match (:func:`graspenv.contacts.matching.correspond_batch`:
    every continuing contact in one call) then gives each current point its
    predecessor, whose particle it reuses; current points without one get a new
-   particle put down beside the first neighbouring point that is not new, or,
-   farther than :data:`FAR_FROM_ANCHOR` contour spacings (or particle diameters)
-   from that point's particle (the other half of a merged contact), on whatever
-   lies under the point itself, as a new contact's are;
-   previous points whose successor did not name them release theirs.
+   particle put down beside the first neighbouring point that is not new (its
+   particle moved by the new point's offset from that point, less any part of the
+   offset into the side it presses), or, farther than :data:`FAR_FROM_ANCHOR`
+   contour spacings (or particle diameters) from that point's particle (the other
+   half of a merged contact), on whatever lies under the point itself, as a new
+   contact's are; previous points whose successor did not name them release theirs.
 4. *New contact.* One particle (stack) per contour point, put down by ray casting on
-   whatever is there (table or object top).
+   whatever is there (table or object top); a point just outside an object's side
+   goes on the table beside it, clear of the side.
 5. *Culling* (``proxy.cull``). A point that cannot touch an object before the next
    frame (farther from every object's footprint than the particle radius, twice its
    contact's travel this frame, the fastest object's travel in a frame and
@@ -321,6 +323,18 @@ class PersistentProxies:
             # unchanged by it).
             start = pool.positions(particles[anchors].reshape(-1)).reshape(-1, layers, 3)
             near = np.hypot(*(current[beside] - start[:, 0, :2]).T) <= self._far
+            # Beside the anchor's particle, as far from it as the new point is from
+            # the anchor's point, less any part of that into the side the anchor's
+            # particle presses. Started on it, a new particle stood a spacing from
+            # its point, held there by friction on a squeezed side for tens of
+            # frames; dropout holes put such points down every few frames, always
+            # on the same side of their neighbours, and that turned the object
+            # (docs/design.md, "Particles put down beside a side or a neighbour").
+            # The whole offset put particles into the object.
+            offset = current[beside] - current[anchors]
+            outward = self._world.footprint_normal(start[:, 0, :2], 2.0 * pool.radius)
+            into = np.minimum(np.einsum("ij,ij->i", offset, outward), 0.0)
+            start[:, :, :2] += (offset - into[:, None] * outward)[:, None, :]
             lost = np.concatenate([lost, beside[~near]])
             beside, start = beside[near], start[near]
         if beside.size:
@@ -472,7 +486,6 @@ class PersistentProxies:
         shortfall = pool.last_targets(particles[rows, 0]) - hold[contact] - at
         body = owner[rows]
         arm = at - world.object_states().position[body, :2]
-        outward *= np.where(np.einsum("ij,ij->i", arm, outward) < 0.0, -1.0, 1.0)[:, None]
         # The arm to the particle's point on the side, not to its centre: particles
         # on one face press in to depths a few micrometres apart, and seen from
         # their centres the face would tell a turn from a shift along it.
@@ -517,9 +530,26 @@ class PersistentProxies:
             born[near] = True
 
     def _put_down(self, ids: NDArray[np.int64], points: NDArray[np.float64]) -> None:
-        """Place stacks on whatever lies under their points' discs (rays from above)."""
-        bottom = self._world.rest_heights(points) + self._world.pool.radius
-        self._world.pool.place(ids.reshape(-1), self._stack_positions(points, bottom))
+        """Place stacks on whatever lies under their points' discs (rays from above),
+        except a point outside every footprint but within two radii of a side: its
+        stack goes on what lies under its centre beside that side, moved out along
+        the side's normal until the sphere clears it. Put on the top face there (its
+        disc's rays meet it up to 2.5-3 mm out) a particle whose centre is off the face
+        rolls off the edge, and driven at its point it stays wedged on the side, up in
+        the air, tipping the object (docs/design.md, "Particles put down beside a
+        side or a neighbour")."""
+        world, radius = self._world, self._world.pool.radius
+        bottom = world.rest_heights(points)
+        owner, depth = world.footprint_depth(points)
+        near = np.flatnonzero((owner >= 0) & (depth <= 0.0) & (depth > -2.0 * radius))
+        outward = world.footprint_normal(points[near], 2.0 * radius)
+        sided = np.any(outward != 0.0, axis=1)  # none by a leaning cylinder
+        if np.any(sided):
+            near, outward = near[sided], outward[sided]
+            points = points.copy()
+            points[near] += np.maximum(radius + depth[near], 0.0)[:, None] * outward
+            bottom[near] = world.ray_heights(points[near]).height
+        world.pool.place(ids.reshape(-1), self._stack_positions(points, bottom + radius))
 
     def _stack_positions(
         self, points: NDArray[np.float64], bottom: NDArray[np.float64]

@@ -73,10 +73,17 @@ def test_object_footprint_depth_margin_and_top(world: PhysicsWorld) -> None:
 
 def test_footprint_normal_is_the_nearest_side_and_none_far_away(world: PhysicsWorld) -> None:
     """The box (half side BOX_HALF, at the origin): a point just outside or inside a
-    face gets that face's normal; one farther out than ``near`` gets none."""
-    points = [[BOX_HALF + 0.002, 0.005], [0.004, -BOX_HALF + 0.001], [BOX_HALF + 0.01, 0.0]]
+    face gets that face's outward normal; one farther out than ``near`` gets none."""
+    points = [
+        [BOX_HALF + 0.002, 0.005],
+        [0.004, -BOX_HALF + 0.001],
+        [-BOX_HALF + 0.001, 0.002],
+        [0.003, BOX_HALF + 0.003],
+        [BOX_HALF + 0.01, 0.0],
+    ]
     normal = world.footprint_normal(points, near=0.004)
-    np.testing.assert_allclose(np.abs(normal), [[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]], atol=1e-9)
+    expected = [[1.0, 0.0], [0.0, -1.0], [-1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]
+    np.testing.assert_allclose(normal, expected, atol=1e-9)
 
 
 def test_footprint_of_a_tilted_box_is_the_shadow_of_its_corners(world: PhysicsWorld) -> None:

@@ -792,7 +792,10 @@ class PhysicsWorld(Closeable):
         centre and four points 0.9 radius around it), so a particle whose centre is
         just outside an object's side but whose sphere would overlap it rests on the
         top face instead of being put into the side, and one that fits under an
-        overhang (beside a ball) rests on the table.
+        overhang (beside a ball) rests on the table. (The persistent proxies move a
+        point outside a box's or an upright cylinder's side out until its particle
+        clears the side and put it on the table instead: on the top face, its
+        centre off the face, it rolled off the edge.)
 
         Args:
             xy: particle centres, metres, world frame, shape (N, 2).

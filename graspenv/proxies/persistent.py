@@ -153,8 +153,8 @@ class _Sides(NamedTuple):
     Attributes:
         rows: their indices, (N,).
         at: where their bottom particles are, metres, world frame, (N, 3).
-        normal: the table-plane normal of the nearest object's side at each particle
-            within two particle radii, sign arbitrary, or a zero row, (N, 2).
+        normal: the table-plane outward normal of the nearest object's side at each
+            particle within two particle radii, or a zero row, (N, 2).
     """
 
     rows: NDArray[np.intp]
@@ -330,11 +330,13 @@ class PersistentProxies:
             # frames; dropout holes put such points down every few frames, always
             # on the same side of their neighbours, and that turned the object
             # (docs/design.md, "Particles put down beside a side or a neighbour").
-            # The whole offset put particles into the object.
-            offset = current[beside] - current[anchors]
-            outward = self._world.footprint_normal(start[:, 0, :2], 2.0 * pool.radius)
-            into = np.minimum(np.einsum("ij,ij->i", offset, outward), 0.0)
-            start[:, :, :2] += (offset - into[:, None] * outward)[:, None, :]
+            # The whole offset put particles into the object. An anchor on a top
+            # face keeps its new neighbour on it: moved, that could step off the
+            # face's edge into the air beside the side.
+            on_table = start[:, 0, 2] < pool.radius + REST_TOLERANCE
+            offset = current[beside[on_table]] - current[anchors[on_table]]
+            outward = self._world.footprint_normal(start[on_table, 0, :2], 2.0 * pool.radius)
+            start[on_table, :, :2] += not_into(offset, outward)[:, None, :]
             lost = np.concatenate([lost, beside[~near]])
             beside, start = beside[near], start[near]
         if beside.size:
@@ -531,17 +533,21 @@ class PersistentProxies:
 
     def _put_down(self, ids: NDArray[np.int64], points: NDArray[np.float64]) -> None:
         """Place stacks on whatever lies under their points' discs (rays from above),
-        except a point outside every footprint but within two radii of a side: its
-        stack goes on what lies under its centre beside that side, moved out along
-        the side's normal until the sphere clears it. Put on the top face there (its
-        disc's rays meet it up to 2.5-3 mm out) a particle whose centre is off the face
-        rolls off the edge, and driven at its point it stays wedged on the side, up in
-        the air, tipping the object (docs/design.md, "Particles put down beside a
-        side or a neighbour")."""
+        except a point outside every footprint but within two radii of a box's or an
+        upright cylinder's side: its stack goes on what lies under its centre beside
+        that side, moved out along the side's normal until the sphere clears it. Put
+        on the top face there (its disc's rays meet it up to 2.5-3 mm out) a particle
+        whose centre is off the face rolls off the edge, and driven at its point it
+        stays wedged on the side, up in the air, tipping the object (docs/design.md,
+        "Particles put down beside a side or a neighbour"). A ball overhangs the
+        table there, and the particle rests on the table at its point
+        (:meth:`~graspenv.physics.world.PhysicsWorld.rest_heights`)."""
         world, radius = self._world, self._world.pool.radius
         bottom = world.rest_heights(points)
         owner, depth = world.footprint_depth(points)
         near = np.flatnonzero((owner >= 0) & (depth <= 0.0) & (depth > -2.0 * radius))
+        balls = np.array([o.shape == "sphere" for o in world.scene.objects], bool)
+        near = near[~balls[owner[near]]]
         outward = world.footprint_normal(points[near], 2.0 * radius)
         sided = np.any(outward != 0.0, axis=1)  # none by a leaning cylinder
         if np.any(sided):
@@ -718,6 +724,14 @@ def _plan_follow(
         follows, ended_rows, contacts, ids[contacts], continued, motion, previous_rows,
         predicted, current, travel,
     )  # fmt: skip
+
+
+def not_into(offset: NDArray[np.float64], outward: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Offsets (metres, (N, 2)) less any part of each into its side: along the side's
+    outward normal (unit, or a zero row where there is no side), a negative part is
+    taken away and a positive one kept."""
+    into = np.minimum(np.einsum("ij,ij->i", offset, outward), 0.0)
+    return offset - into[:, None] * outward
 
 
 @njit

@@ -39,7 +39,7 @@ def _normals(
     )
 
 
-def test_a_box_side_gives_its_own_normal_inside_and_just_outside() -> None:
+def test_a_box_side_gives_its_own_outward_normal_inside_and_just_outside() -> None:
     yaw = 0.5
     c, s = math.cos(yaw), math.sin(yaw)
     x_axis, y_axis = np.array([c, s]), np.array([-s, c])
@@ -54,8 +54,9 @@ def test_a_box_side_gives_its_own_normal_inside_and_just_outside() -> None:
         centre - 0.036 * x_axis,
     ]
     normals = _normals([list(p) for p in points], "box", (0.06, 0.06, 0.03), _rotation(yaw))
-    for row, axis in zip(normals[:4], (x_axis, x_axis, y_axis, y_axis), strict=True):
-        assert abs(row @ axis) == pytest.approx(1.0, abs=1e-12)
+    # Each pointing out of the box.
+    for row, axis in zip(normals[:4], (x_axis, x_axis, -y_axis, y_axis), strict=True):
+        assert row @ axis == pytest.approx(1.0, abs=1e-12)
     np.testing.assert_array_equal(normals[4], [0.0, 0.0])
 
 

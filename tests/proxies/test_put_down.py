@@ -12,6 +12,7 @@ from graspenv.bench.interactions import BOX, FINGER_RADIUS, with_objects
 from graspenv.bench.invariants import Tolerances
 from graspenv.bench.playback import Played, play
 from graspenv.config import load_config
+from graspenv.proxies.persistent import not_into
 from graspenv.simulation import Simulation
 from graspenv.surface.noise import SensorNoise
 from graspenv.surface.render import render_mask
@@ -71,3 +72,18 @@ def test_particles_put_down_under_holes_do_not_start_on_their_neighbours() -> No
     play(scene, script, ["box"], noise=SensorNoise(holes=2, hole_radius=2.0), each_frame=paired)
     assert len(frames) == 85
     assert sum(frames) <= 17  # a fifth of the frames
+
+
+def test_a_new_particle_moves_along_its_neighbours_side_and_away_but_not_into_it() -> None:
+    """The shift from the neighbour's particle: a point offset into the side the
+    neighbour presses (outward normal +x) keeps only its part along the side; one
+    offset away from the side, or beside no side, keeps its whole offset."""
+    offset = np.array([[-0.001, 0.002], [0.001, -0.002], [-0.001, 0.002], [0.0, 0.002]])
+    outward = np.array([[1.0, 0.0], [1.0, 0.0], [0.0, 0.0], [1.0, 0.0]])
+    expected = [[0.0, 0.002], [0.001, -0.002], [-0.001, 0.002], [0.0, 0.002]]
+    np.testing.assert_allclose(not_into(offset, outward), expected, atol=1e-15)
+    # On a tilted side the same: the part along the normal, when inward, goes.
+    normal = np.array([[0.6, 0.8]])
+    shifted = not_into(np.array([[-0.003, 0.0]]), normal)
+    assert shifted[0] @ normal[0] == pytest.approx(0.0, abs=1e-15)
+    np.testing.assert_allclose(shifted[0] @ np.array([0.8, -0.6]), -0.0024, atol=1e-15)

@@ -22,12 +22,13 @@ real fingertip. One camera frame:
    sum-of-squared-distances match (:func:`graspenv.contacts.matching.correspond_batch`:
    every continuing contact in one call) then gives each current point its
    predecessor, whose particle it reuses; current points without one get a new
-   particle put down beside the first neighbouring point that is not new (its
+   particle put down beside the nearest neighbouring point that is not new (its
    particle moved by the new point's offset from that point, less any part of the
-   offset into the side it presses), or, farther than :data:`FAR_FROM_ANCHOR`
-   contour spacings (or particle diameters) from that point's particle (the other
-   half of a merged contact), on whatever lies under the point itself, as a new
-   contact's are; previous points whose successor did not name them release theirs.
+   offset into the side it presses; not moved off a top face), or, farther than
+   :data:`FAR_FROM_ANCHOR` contour spacings (or particle diameters) from that
+   point's particle (the other half of a merged contact), on whatever lies under the
+   point itself, as a new contact's are; previous points whose successor did not
+   name them release theirs.
 4. *New contact.* One particle (stack) per contour point, put down by ray casting on
    whatever is there (table or object top); a point just outside an object's side
    goes on the table beside it, clear of the side.

@@ -324,6 +324,8 @@ class PersistentProxies:
             # unchanged by it).
             start = pool.positions(particles[anchors].reshape(-1)).reshape(-1, layers, 3)
             near = np.hypot(*(current[beside] - start[:, 0, :2]).T) <= self._far
+            lost = np.concatenate([lost, beside[~near]])
+            beside, anchors, start = beside[near], anchors[near], start[near]
             # Beside the anchor's particle, as far from it as the new point is from
             # the anchor's point, less any part of that into the side the anchor's
             # particle presses. Started on it, a new particle stood a spacing from
@@ -334,12 +336,10 @@ class PersistentProxies:
             # The whole offset put particles into the object. An anchor on a top
             # face keeps its new neighbour on it: moved, that could step off the
             # face's edge into the air beside the side.
-            on_table = start[:, 0, 2] < pool.radius + REST_TOLERANCE
+            on_table = np.flatnonzero(start[:, 0, 2] < pool.radius + REST_TOLERANCE)
             offset = current[beside[on_table]] - current[anchors[on_table]]
             outward = self._world.footprint_normal(start[on_table, 0, :2], 2.0 * pool.radius)
             start[on_table, :, :2] += not_into(offset, outward)[:, None, :]
-            lost = np.concatenate([lost, beside[~near]])
-            beside, start = beside[near], start[near]
         if beside.size:
             ids = pool.acquire(beside.size * layers).reshape(-1, layers)
             pool.place(ids.reshape(-1), start.reshape(-1, 3))
@@ -544,18 +544,20 @@ class PersistentProxies:
         table there, and the particle rests on the table at its point
         (:meth:`~graspenv.physics.world.PhysicsWorld.rest_heights`)."""
         world, radius = self._world, self._world.pool.radius
-        bottom = world.rest_heights(points)
         owner, depth = world.footprint_depth(points)
         near = np.flatnonzero((owner >= 0) & (depth <= 0.0) & (depth > -2.0 * radius))
         balls = np.array([o.shape == "sphere" for o in world.scene.objects], bool)
         near = near[~balls[owner[near]]]
         outward = world.footprint_normal(points[near], 2.0 * radius)
         sided = np.any(outward != 0.0, axis=1)  # none by a leaning cylinder
-        if np.any(sided):
-            near, outward = near[sided], outward[sided]
-            points = points.copy()
-            points[near] += np.maximum(radius + depth[near], 0.0)[:, None] * outward
-            bottom[near] = world.ray_heights(points[near]).height
+        near, outward = near[sided], outward[sided]
+        beside = np.zeros(len(points), bool)
+        beside[near] = True
+        points = points.copy()
+        points[near] += np.maximum(radius + depth[near], 0.0)[:, None] * outward
+        bottom = np.empty(len(points))
+        bottom[~beside] = world.rest_heights(points[~beside])
+        bottom[beside] = world.ray_heights(points[beside]).height
         world.pool.place(ids.reshape(-1), self._stack_positions(points, bottom + radius))
 
     def _stack_positions(

@@ -24,6 +24,8 @@ __all__ = [
     "footprint_depths",
     "footprint_normals",
     "inscribed_radius",
+    "less_along",
+    "not_into",
     "reach_from",
     "rotate",
     "shoelace",
@@ -405,3 +407,21 @@ def convex_hull(points: NDArray[np.float64]) -> NDArray[np.float64]:
             size += 1
         size -= 1  # the last point of each half is the first of the other
     return chain[:size].copy()
+
+
+def less_along(vectors: NDArray[np.float64], unit: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Each row of ``vectors`` less its part along the same row of ``unit`` (a unit
+    vector or zero), shape (N, 2)."""
+    return vectors - _along(vectors, unit)[:, None] * unit
+
+
+def not_into(offset: NDArray[np.float64], outward: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Offsets (metres, (N, 2)) less any part of each into its side: along the side's
+    outward normal (unit, or a zero row where there is no side), a negative part is
+    taken away and a positive one kept."""
+    return offset - np.minimum(_along(offset, outward), 0.0)[:, None] * outward
+
+
+def _along(vectors: NDArray[np.float64], unit: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Each row's component along the same row of ``unit``, shape (N,)."""
+    return np.einsum("ij,ij->i", vectors, unit)

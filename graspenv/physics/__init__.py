@@ -3,10 +3,11 @@
 :class:`PhysicsWorld` holds the table, the objects and a :class:`ParticlePool` of
 sphere proxies. The proxies stage drives it once per camera frame:
 
-1. touch-down: ``ids = world.pool.acquire(n)``; ``world.ray_heights(xy)`` gives the
-   surface under each new contour point (particles are transparent to it), and
-   ``world.pool.place(ids, xyz)`` puts each particle there at z = height + radius
-   (stack layer l at ``l · proxy.stack_spacing`` above). ``world.object_footprint``
+1. touch-down: ``ids = world.pool.acquire(n)``; ``world.put_down(xy)`` gives where
+   a particle lowered onto each new contour point comes to rest (on the surface
+   under its disc, or on the table beside a side it would overlap; particles are
+   transparent to its rays), and ``world.pool.place(ids, xyz)`` puts each particle
+   there (stack layer l at ``l · proxy.stack_spacing`` above). ``world.object_footprint``
    tells which points lie deeper than ``proxy.penetration_margin`` inside an
    object's footprint (docs/design.md, section 2, step 7);
 2. lift-off: ``world.pool.release(ids)``;

@@ -2,8 +2,8 @@
 
 :class:`RayCaster` casts Bullet's batched rays onto the table and the objects
 (particles are transparent to them) for the world's queries:
-``PhysicsWorld.ray_heights`` (a new particle is put on the surface under its contour
-point), ``PhysicsWorld.rest_heights`` (the highest surface under a particle's disc)
+``PhysicsWorld.ray_heights`` (the surface under each point),
+``PhysicsWorld.put_down`` (the highest surface under a new particle's disc)
 and, every frame, the rest height of each raised bottom particle
 (:data:`SUPPORT_CLEARANCE` says which surfaces count as its support).
 """
@@ -181,7 +181,7 @@ class RayCaster:
     ) -> None:
         """Forget (in place) the hits of each disc that fits under what they meet.
 
-        For particles put down from above (:meth:`PhysicsWorld.rest_heights`). A ray
+        For particles put down from above (:meth:`PhysicsWorld.put_down`). A ray
         down past a ball's equator meets its flank, but the ball overhangs the table
         there: a particle on the table under it touches nothing, and put on the
         flank it slid down between ball and table and spun the ball (README,

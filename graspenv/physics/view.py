@@ -1,5 +1,6 @@
-"""Colours and cheap visual shapes for the headless 3-D view of a PhysicsWorld
-(:meth:`~graspenv.physics.world.PhysicsWorld.render`).
+"""The headless 3-D view of a PhysicsWorld
+(:meth:`~graspenv.physics.world.PhysicsWorld.render`): its camera, colours and cheap
+visual shapes.
 
 Images come from Bullet's software TinyRenderer (``ER_TINY_RENDERER``): it needs no
 GUI, display or EGL, so it works in DIRECT mode on any machine. It draws every
@@ -16,6 +17,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pybullet as pb
+from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "FLOOR_RGBA",
@@ -25,7 +28,15 @@ __all__ = [
     "TABLE_RGBA",
     "icosahedron",
     "object_rgba",
+    "render_view",
 ]
+
+# The camera of :func:`render_view`. Nearest distance it draws, metres: well
+# under any sensible view distance.
+_NEAR = 0.01
+# The far plane lies this far beyond the target: the whole floor (4 m across) is in
+# range, parked particles (more than a kilometre away) never are.
+_FAR_BEYOND_TARGET = 10.0
 
 #: Colours (red, green, blue, alpha in [0, 1]).
 TABLE_RGBA = (0.70, 0.74, 0.80, 1.0)
@@ -84,3 +95,55 @@ def icosahedron(radius: float) -> tuple[list[list[float]], list[int]]:
         (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1),
     ]  # fmt: skip
     return vertices.tolist(), [i for face in faces for i in face]
+
+
+def render_view(
+    client: int,
+    size: tuple[int, int],
+    target: ArrayLike,
+    orbit: tuple[float, float, float],
+    fov: float,
+) -> NDArray[np.uint8]:
+    """A 3-D view of Bullet client ``client``'s bodies, ``size`` (width, height)
+    pixels, the camera at ``orbit`` (distance, yaw, pitch) about ``target``: the
+    arguments, the image and the errors are
+    :meth:`~graspenv.physics.world.PhysicsWorld.render`'s."""
+    width, height = size
+    distance, yaw_deg, pitch_deg = orbit
+    if int(width) != width or int(height) != height or width < 1 or height < 1:
+        raise ValueError(f"render needs a positive integer width and height, got {width}×{height}")
+    point = np.asarray(target, dtype=float)
+    if point.shape != (3,) or not np.all(np.isfinite(point)):
+        raise ValueError(f"render target must be 3 finite numbers (metres), got {target!r}")
+    if not distance > 0.0:
+        raise ValueError(f"render distance must be > 0 metres, got {distance}")
+    if not 0.0 < fov < 180.0:
+        raise ValueError(f"render fov must be in (0, 180) degrees, got {fov}")
+    w, h = int(width), int(height)
+    view = pb.computeViewMatrixFromYawPitchRoll(
+        cameraTargetPosition=point.tolist(),
+        distance=float(distance),
+        yaw=float(yaw_deg),
+        pitch=float(pitch_deg),
+        roll=0.0,
+        upAxisIndex=2,
+        physicsClientId=client,
+    )
+    projection = pb.computeProjectionMatrixFOV(
+        fov=float(fov),
+        aspect=w / h,
+        nearVal=_NEAR,
+        farVal=float(distance) + _FAR_BEYOND_TARGET,
+        physicsClientId=client,
+    )
+    _, _, rgba, _, _ = pb.getCameraImage(
+        w,
+        h,
+        viewMatrix=view,
+        projectionMatrix=projection,
+        renderer=pb.ER_TINY_RENDERER,
+        physicsClientId=client,
+    )
+    # PyBullet returns an ndarray when built with numpy, a flat list otherwise.
+    image = np.asarray(rgba, dtype=np.uint8).reshape(h, w, 4)
+    return np.ascontiguousarray(image[:, :, :3])

@@ -14,10 +14,11 @@ and :class:`~graspenv.physics.rigid.RigidBodies` hold the proxies;
 :class:`~graspenv.physics.rays.RayCaster` casts the rays under points and
 particles; :class:`~graspenv.physics.stepping.FrameStepper` runs a frame's
 sub-steps and the pushes on objects; :mod:`~graspenv.physics.view` gives the bodies
-their colours and the particles their cheap mesh; :mod:`~graspenv.physics.reports`
-holds what the queries return. This module keeps the one public class, the
-objects' states (read, and set by teleporting), the per-frame particle drive
-(:meth:`PhysicsWorld.step_frame`) and the 3-D view.
+their colours and the particles their cheap mesh, and draws the 3-D view;
+:mod:`~graspenv.physics.reports` holds what the queries return. This module keeps
+the one public class, the objects' states (read, and set by teleporting), where new
+particles are put down (:meth:`PhysicsWorld.put_down`) and the per-frame particle
+drive (:meth:`PhysicsWorld.step_frame`).
 
 The time step is ``1 / (surface.fps · physics.substeps)``, sub-stepped in Python:
 the particle force is recomputed before every ``stepSimulation``. Bullet's own
@@ -59,6 +60,7 @@ from graspenv.physics.reports import (
 )
 from graspenv.physics.rigid import RigidBodies
 from graspenv.physics.stepping import FrameStepper
+from graspenv.physics.view import render_view
 from graspenv.resources import Closeable
 
 __all__ = [
@@ -70,13 +72,6 @@ __all__ = [
     "PhysicsWorld",
     "RayHits",
 ]
-
-# The camera of :meth:`PhysicsWorld.render`. Nearest distance it draws, metres: well
-# under any sensible view distance.
-_NEAR = 0.01
-# The far plane lies this far beyond the target: the whole floor (4 m across) is in
-# range, parked particles (more than a kilometre away) never are.
-_FAR_BEYOND_TARGET = 10.0
 
 
 class ObjectStateChange(TypedDict, total=False):
@@ -469,45 +464,8 @@ class PhysicsWorld(Closeable):
             ValueError: a size, the distance or the field of view is out of range, or
                 the target is not three numbers.
         """
-        if int(width) != width or int(height) != height or width < 1 or height < 1:
-            raise ValueError(
-                f"render needs a positive integer width and height, got {width}×{height}"
-            )
-        point = np.asarray(target, dtype=float)
-        if point.shape != (3,) or not np.all(np.isfinite(point)):
-            raise ValueError(f"render target must be 3 finite numbers (metres), got {target!r}")
-        if not distance > 0.0:
-            raise ValueError(f"render distance must be > 0 metres, got {distance}")
-        if not 0.0 < fov < 180.0:
-            raise ValueError(f"render fov must be in (0, 180) degrees, got {fov}")
-        w, h = int(width), int(height)
-        view = pb.computeViewMatrixFromYawPitchRoll(
-            cameraTargetPosition=point.tolist(),
-            distance=float(distance),
-            yaw=float(yaw_deg),
-            pitch=float(pitch_deg),
-            roll=0.0,
-            upAxisIndex=2,
-            physicsClientId=self.client,
-        )
-        projection = pb.computeProjectionMatrixFOV(
-            fov=float(fov),
-            aspect=w / h,
-            nearVal=_NEAR,
-            farVal=float(distance) + _FAR_BEYOND_TARGET,
-            physicsClientId=self.client,
-        )
-        _, _, rgba, _, _ = pb.getCameraImage(
-            w,
-            h,
-            viewMatrix=view,
-            projectionMatrix=projection,
-            renderer=pb.ER_TINY_RENDERER,
-            physicsClientId=self.client,
-        )
-        # PyBullet returns an ndarray when built with numpy, a flat list otherwise.
-        image = np.asarray(rgba, dtype=np.uint8).reshape(h, w, 4)
-        return np.ascontiguousarray(image[:, :, :3])
+        orbit = (distance, yaw_deg, pitch_deg)
+        return render_view(self.client, (width, height), target, orbit, fov)
 
     # -- queries ---------------------------------------------------------------------
 
@@ -785,27 +743,49 @@ class PhysicsWorld(Closeable):
         ``physics.control_time``, or the configured sub-step if that is longer."""
         return max(self.scene.physics.control_time, frame_dt / self.substeps)
 
-    def rest_heights(self, xy: ArrayLike) -> NDArray[np.float64]:
-        """Where a particle lowered from above onto each point comes to rest.
+    def put_down(self, xy: ArrayLike, clear_sides: bool = True) -> NDArray[np.float64]:
+        """Where a particle lowered from above onto each point is put: its sphere's
+        centre, metres, shape (N, 3).
 
-        The height of the highest surface under the particle's disc (rays from its
-        centre and four points 0.9 radius around it), so a particle whose centre is
-        just outside an object's side but whose sphere would overlap it rests on the
-        top face instead of being put into the side, and one that fits under an
-        overhang (beside a ball) rests on the table. (The persistent proxies move a
-        point outside a box's or an upright cylinder's side out until its particle
-        clears the side and put it on the table instead: on the top face, its
-        centre off the face, it rolled off the edge.)
+        It rests on the highest surface under its disc (rays from its centre and four
+        points 0.9 radius around it), so a particle whose sphere would overlap a side
+        goes on the top face rather than into the side, and one that fits under an
+        overhang (beside a ball) rests on the table. A point outside every footprint
+        but within two radii of a box's or an upright cylinder's side is moved out
+        along the side's outward normal until its sphere clears it and put on what
+        lies under its centre, the table: Bullet's box meets a ray up to 0.6 mm past
+        its side, so the disc's rays put such a particle on the top face with its
+        centre off it, and it rolled off the edge and hung wedged on the side
+        (docs/design.md, "Particles put down beside a side or a neighbour"). No
+        move by a leaning cylinder (no side to follow) nor by a ball.
 
         Args:
-            xy: particle centres, metres, world frame, shape (N, 2).
-
-        Returns:
-            Height of the supporting surface, metres (0: table), shape (N,).
+            xy: points, metres, world frame, shape (N, 2).
+            clear_sides: move points beside a side out (if not, every particle rests
+                where its disc's rays say, as the paper's instant proxies do).
         """
-        points = np.asarray(xy, dtype=float).reshape(-1, 2)
-        top = self._rays.top()
-        starts = np.column_stack([points, np.full(len(points), top)])
+        points = np.array(xy, dtype=float).reshape(-1, 2)
+        radius = self.pool.radius
+        owner, depth = self.footprint_depth(points)
+        beside = clear_sides & (owner >= 0) & (depth <= 0.0) & (depth > -2.0 * radius)
+        near = np.flatnonzero(beside)
+        balls = np.array([o.shape == "sphere" for o in self.scene.objects], bool)
+        near = near[~balls[owner[near]]]
+        outward = self.footprint_normal(points[near], 2.0 * radius)
+        sided = np.any(outward != 0.0, axis=1)
+        near, outward = near[sided], outward[sided]
+        points[near] += np.maximum(radius + depth[near], 0.0)[:, None] * outward
+        beside = np.zeros(len(points), bool)
+        beside[near] = True
+        bottom = np.empty(len(points))
+        bottom[~beside] = self._rest_heights(points[~beside])
+        bottom[beside] = self.ray_heights(points[beside]).height
+        return np.column_stack([points, bottom + radius])
+
+    def _rest_heights(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The height of the highest surface under each particle's disc at ``points``
+        (N, 2), metres; 0, the table, for one that fits under an overhang."""
+        starts = np.column_stack([points, np.full(len(points), self._rays.top())])
         return self._rays.support_heights(starts, fit_under=True)
 
 

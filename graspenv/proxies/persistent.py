@@ -77,7 +77,7 @@ from graspenv.config import ProxyConfig
 from graspenv.contacts.matching import correspond_batch
 from graspenv.contacts.resample import follow_kernel, gather, gather_rows, resample_kernel
 from graspenv.contacts.tracking import ContactFrame, ContactSet
-from graspenv.geometry import Polylines, bounds_of, reach_from
+from graspenv.geometry import Polylines, bounds_of, not_into, reach_from
 from graspenv.jit import njit
 from graspenv.physics.control import REST_TOLERANCE
 from graspenv.physics.world import PhysicsWorld
@@ -533,37 +533,16 @@ class PersistentProxies:
             born[near] = True
 
     def _put_down(self, ids: NDArray[np.int64], points: NDArray[np.float64]) -> None:
-        """Place stacks on whatever lies under their points' discs (rays from above),
-        except a point outside every footprint but within two radii of a box's or an
-        upright cylinder's side: its stack goes on what lies under its centre beside
-        that side, moved out along the side's normal until the sphere clears it. Put
-        on the top face there (its disc's rays meet it up to 2.5-3 mm out) a particle
-        whose centre is off the face rolls off the edge, and driven at its point it
-        stays wedged on the side, up in the air, tipping the object (docs/design.md,
-        "Particles put down beside a side or a neighbour"). A ball overhangs the
-        table there, and the particle rests on the table at its point
-        (:meth:`~graspenv.physics.world.PhysicsWorld.rest_heights`)."""
-        world, radius = self._world, self._world.pool.radius
-        owner, depth = world.footprint_depth(points)
-        near = np.flatnonzero((owner >= 0) & (depth <= 0.0) & (depth > -2.0 * radius))
-        balls = np.array([o.shape == "sphere" for o in world.scene.objects], bool)
-        near = near[~balls[owner[near]]]
-        outward = world.footprint_normal(points[near], 2.0 * radius)
-        sided = np.any(outward != 0.0, axis=1)  # none by a leaning cylinder
-        near, outward = near[sided], outward[sided]
-        beside = np.zeros(len(points), bool)
-        beside[near] = True
-        points = points.copy()
-        points[near] += np.maximum(radius + depth[near], 0.0)[:, None] * outward
-        bottom = np.empty(len(points))
-        bottom[~beside] = world.rest_heights(points[~beside])
-        bottom[beside] = world.ray_heights(points[beside]).height
-        world.pool.place(ids.reshape(-1), self._stack_positions(points, bottom + radius))
+        """Place stacks where particles lowered onto their points come to rest
+        (:meth:`~graspenv.physics.world.PhysicsWorld.put_down`)."""
+        spots = self._world.put_down(points)
+        self._world.pool.place(ids.reshape(-1), self._stack_positions(spots[:, :2], spots[:, 2]))
 
     def _stack_positions(
         self, points: NDArray[np.float64], bottom: NDArray[np.float64]
     ) -> NDArray[np.float64]:
-        """Sphere centres of stacks on points (metres, (K, 2)) with bottoms at z."""
+        """Sphere centres of stacks on points (metres, (K, 2)) whose lowest sphere's
+        centre is at z ``bottom``."""
         k = len(points)
         xy = np.repeat(points, self._layers, axis=0)
         z = (bottom[:, None] + self._rise[None, :]).reshape(-1)
@@ -727,14 +706,6 @@ def _plan_follow(
         follows, ended_rows, contacts, ids[contacts], continued, motion, previous_rows,
         predicted, current, travel,
     )  # fmt: skip
-
-
-def not_into(offset: NDArray[np.float64], outward: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Offsets (metres, (N, 2)) less any part of each into its side: along the side's
-    outward normal (unit, or a zero row where there is no side), a negative part is
-    taken away and a positive one kept."""
-    into = np.minimum(np.einsum("ij,ij->i", offset, outward), 0.0)
-    return offset - into[:, None] * outward
 
 
 @njit

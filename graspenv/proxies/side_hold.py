@@ -15,7 +15,9 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["WRAPPED_NORMAL", "less_along", "rigid_part", "side_hold"]
+from graspenv.geometry import less_along
+
+__all__ = ["WRAPPED_NORMAL", "rigid_part", "side_hold"]
 
 #: The side hold counts a contact only where its particles' side normals add up to
 #: at least this share of their number (an arc of up to about 150° either side of
@@ -143,9 +145,3 @@ def rigid_part(
     )
     fitted = np.einsum("ij,ij->i", seen, motion[body])
     return fitted[:, None] * tangent
-
-
-def less_along(vectors: NDArray[np.float64], unit: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Each row of ``vectors`` less its part along the same row of ``unit`` (a unit
-    vector or zero), shape (N, 2)."""
-    return vectors - np.einsum("ij,ij->i", vectors, unit)[:, None] * unit

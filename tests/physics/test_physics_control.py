@@ -279,23 +279,34 @@ def test_the_support_plane_of_a_ball_is_its_tangent_and_a_box_top_is_level(
     np.testing.assert_allclose(height[1:], 0.03, atol=1e-4)
 
 
-def test_a_particle_put_down_beside_a_ball_rests_on_the_table_under_its_overhang(
+def test_a_particle_put_down_beside_a_ball_or_a_box_rests_on_the_table(
     make_world: Callable[..., PhysicsWorld],
 ) -> None:
     radius = 0.03
     world = _ball_and_box(make_world, radius)
+    r = world.pool.radius
     # Centres 1 mm outside the ball's equator and the box's side: each disc's ring
     # ray meets the object. The ball overhangs the table there (a particle on the
-    # table misses it by far), so the particle rests on the table; the box is solid
-    # down to the table, so the particle rests on its top.
+    # table misses it by far), so the particle rests on the table where it is; the
+    # box is solid down to the table, so the particle is moved out until it clears
+    # the side and rests on the table (on the top face, its centre off it, it would
+    # roll off the edge).
     beside_ball = [0.1 + radius + 0.001, 0.0]
-    beside_box = [-0.1 + 0.03 + 0.001, 0.0]
+    face = -0.1 + 0.03
+    beside_box = [face + 0.001, 0.0]
     on_ball = [0.1 + 0.3 * radius, 0.0]  # a shoulder with too little room under it
-    height = world.rest_heights([beside_ball, beside_box, on_ball])
-    assert height[0] == 0.0
-    assert height[1] == pytest.approx(0.03, abs=1e-4)
+    on_box = [face - 0.005, 0.0]
+    at = world.put_down([beside_ball, beside_box, on_ball, on_box])
+    np.testing.assert_allclose(at[0], [*beside_ball, r])
+    np.testing.assert_allclose(at[1], [face + r, 0.0, r], atol=1e-9)
     shoulder = radius + math.sqrt(radius**2 - (0.3 * radius) ** 2)
-    assert shoulder < height[2] < shoulder + world.scene.proxy.particle_radius
+    np.testing.assert_allclose(at[2, :2], on_ball)
+    assert shoulder < at[2, 2] - r < shoulder + r
+    np.testing.assert_allclose(at[3], [*on_box, 0.03 + r], atol=1e-4)
+    # As the instant proxies put particles down: on the top face beside the side.
+    kept = world.put_down([beside_ball, beside_box], clear_sides=False)
+    np.testing.assert_allclose(kept[:, :2], [beside_ball, beside_box])
+    np.testing.assert_allclose(kept[:, 2], [r, 0.03 + r], atol=1e-4)
     # Without fit_under (a particle's own support, its rays starting at it) the
     # flank below the ring ray is the support, as before.
     start = np.array([[*beside_ball, 2 * radius]])

@@ -12,7 +12,7 @@ from graspenv.bench.interactions import BOX, FINGER_RADIUS, with_objects
 from graspenv.bench.invariants import Tolerances
 from graspenv.bench.playback import Played, play
 from graspenv.config import load_config
-from graspenv.proxies.persistent import not_into
+from graspenv.geometry import not_into
 from graspenv.simulation import Simulation
 from graspenv.surface.noise import SensorNoise
 from graspenv.surface.render import render_mask

@@ -12,8 +12,9 @@ import pytest
 
 from graspenv.bench.interactions import BOX, pinch, with_objects
 from graspenv.config import ConfigError, ObjectConfig, ProxyConfig, load_config
+from graspenv.geometry import less_along
 from graspenv.proxies.persistent import PersistentProxies
-from graspenv.proxies.side_hold import less_along, rigid_part, side_hold
+from graspenv.proxies.side_hold import rigid_part, side_hold
 from graspenv.simulation import Simulation
 from graspenv.surface.render import render_mask
 from graspenv.surface.shapes import Fingertip

@@ -29,12 +29,15 @@ grasp:
   particle (:func:`graspenv.bench.scenarios.push_until_slip`). Error: the push at
   slip against ``μ_f·ΣN_fingers + μ_t·N_table`` with the normal forces of the
   settled grip, %; beside it (not a target), against the same with the fingers'
-  normal force just before the slip, which the grip's give can lower.
+  normal force just before the slip, which the grip's give can lower. A finger's
+  normal force is the resultant of its particles'
+  (:meth:`~graspenv.physics.reports.ContactReport.grip_normal_force`): round a
+  curved side their parts across the contact cancel.
 
 **Margins.** Whether a rigid pair of fingertips could hold the grasp at all is
 Coulomb's law on the normal force the grip actually exerts (measured, mean over the
 motion): with μ_f and μ_t Bullet's finger–object and table–object coefficients (the
-products of the two bodies'), N the fingers' total normal force, m g the weight, w
+products of the two bodies'), N the fingers' normal force (as for the slip), m g the weight, w
 the distance between the two contacts and r_eff the mean distance of the footprint
 from its centre (0.383 × side for a square, 2/3 radius for a disc, uniform
 pressure),
@@ -364,7 +367,7 @@ def grasp_run(
         state["tilt"] = max(state["tilt"], math.degrees(tilt_angle(q)))
         if index in moving:
             report = sim.contact_report("box")
-            normal.append(float(report.normal_force[report.particle >= 0].sum()))
+            normal.append(report.grip_normal_force(sim.particles_by_contact()))
         return False
 
     played = play(with_objects(base, obj), script, ["box"], (), noise, each, noise_seed=noise_seed)

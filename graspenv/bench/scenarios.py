@@ -214,7 +214,8 @@ def push_until_slip(
 
     def predicted(normal: float | None = None) -> float:
         # Mean normal forces (newtons, the last sub-step of each frame) while settled,
-        # or the fingers' ``normal`` given; each finger presses with about half.
+        # or the fingers' ``normal`` given; each finger presses with about half. A
+        # finger's is the resultant of its particles' (ContactReport.grip_normal_force).
         normal = float(np.mean(state["normal"])) if normal is None else normal
         table = float(np.mean(state["table"]))
         return coulomb_slip_force(normal / 2, finger_mu) + table_mu * table
@@ -227,7 +228,7 @@ def push_until_slip(
     def each(sim: Simulation, index: int, played: Played) -> bool:
         if hold_start <= index:
             report = sim.contact_report("box")
-            fingers = report.normal_force[report.particle >= 0].sum()
+            fingers = report.grip_normal_force(sim.particles_by_contact())
             if index < ramp_start:
                 table = (report.particle < 0) & (report.other_object < 0)
                 state["normal"].append(float(fingers))

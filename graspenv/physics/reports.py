@@ -93,6 +93,31 @@ class ContactReport:
         """Total contact force on the object at each contact, newtons, shape (K, 3)."""
         return self.normal_force[:, None] * self.normal + self.friction
 
+    def grip_normal_force(self, contacts: Mapping[int, NDArray[np.int64]]) -> float:
+        """The normal force the fingers press the object with, newtons: for each
+        contact (a finger; :meth:`graspenv.simulation.Simulation.particles_by_contact`),
+        the length of the resultant of its particles' normal forces, summed over the
+        contacts; a particle in none counts alone.
+
+        On a flat face that is the sum of the particles' normal forces. Round a
+        curved side the particles press along normals fanned out over the contact,
+        and the parts across it cancel: the resultant is the one normal force of a
+        rigid fingertip, and its friction coefficient times it is the most friction
+        the contact can hold along the side (each particle's μ·N acts along its own
+        tangent, whose share along the side is the cosine its normal's share across
+        the contact is). The sum overstates that by up to 2.4 % on a 3 cm cylinder.
+        """
+        pressing = self.particle >= 0
+        vectors = self.normal_force[pressing, None] * self.normal[pressing]
+        which = self.particle[pressing]
+        alone = np.ones(len(which), bool)
+        total = 0.0
+        for ids in contacts.values():
+            mine = np.isin(which, ids)
+            alone &= ~mine
+            total += float(np.linalg.norm(vectors[mine].sum(axis=0)))
+        return total + float(self.normal_force[pressing][alone].sum())
+
     def particle_normal_forces(self) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
         """Normal force on the object summed per particle.
 

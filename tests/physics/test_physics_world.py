@@ -525,3 +525,29 @@ def test_forces_read_after_a_frame_of_more_sub_steps_are_the_frames_own(
 def _bullet_step(world: PhysicsWorld) -> float:
     parameters = pb.getPhysicsEngineParameters(physicsClientId=world.client)
     return float(parameters["fixedTimeStep"])
+
+
+def test_a_fingers_normal_force_is_the_resultant_of_its_particles() -> None:
+    """Two particles on a flat face add up; two fanned ±30° round a curve press
+    across the contact in opposite directions, which cancels (a rigid fingertip
+    would press along the middle with cos 30° of their sum); a particle in no
+    contact counts alone."""
+    from graspenv.physics.reports import ContactReport
+
+    c = math.cos(math.radians(30.0))
+    s = math.sin(math.radians(30.0))
+    normal = np.array(
+        [[1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [-c, s, 0.0], [-c, -s, 0.0], [0.0, 1.0, 0.0]]
+    )
+    report = ContactReport(
+        particle=np.array([3, 4, 7, 8, 9]),
+        other_object=np.full(5, -1),
+        position=np.zeros((5, 3)),
+        normal=normal,
+        normal_force=np.array([1.0, 2.0, 1.5, 1.5, 0.25]),
+        friction=np.zeros((5, 3)),
+        distance=np.zeros(5),
+    )
+    contacts = {0: np.array([3, 4]), 1: np.array([7, 8])}
+    assert report.grip_normal_force(contacts) == pytest.approx(3.0 + 3.0 * c + 0.25)
+    assert report.grip_normal_force({}) == pytest.approx(6.25)

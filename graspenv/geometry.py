@@ -185,11 +185,6 @@ SHAPE_CODES = {"box": 0, "sphere": 1, "cylinder": 2}
 # A cylinder whose top leans less than this off its base (metres) casts the shadow of
 # its end disc: 1 µm, far below the penetration margin and the culling margin.
 _UPRIGHT_LEAN = 1e-6
-# A cylinder whose top leans less than this share of its radius off its base has
-# sides to follow: its side's normal is the radial direction from its centre, less
-# than 1.5° off the shadow's (footprint_normals). Rocked in a grip by a hair (a 3 cm
-# cylinder pushed to its slip leans 0.16°, its top 84 µm off) it had none.
-_SIDED_LEAN = 0.05
 # Points on the rim of a leaning cylinder's end discs that draw its footprint.
 _RIM_POINTS = 32
 
@@ -260,13 +255,6 @@ def _is_disc(shape: int, r: NDArray[np.float64], size: NDArray[np.float64]) -> b
 
 
 @njit
-def _is_sided(shape: int, r: NDArray[np.float64], size: NDArray[np.float64]) -> bool:
-    """Whether a sphere's or a cylinder's side has a radial normal: a sphere, or a
-    cylinder leaning less than :data:`_SIDED_LEAN` of its radius."""
-    return shape == 1 or np.hypot(r[2], r[5]) * size[1] < _SIDED_LEAN * size[0]
-
-
-@njit
 def _box_edges(
     r: NDArray[np.float64], size: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], int]:
@@ -328,15 +316,14 @@ def footprint_normals(
         Unit normals pointing out of the object, shape (N, 2) (on a box's centre line
         through an edge pair, either of the pair's); zero where there is none:
         a point farther than ``near`` from every object, at a disc's centre, or by a
-        cylinder that leans (its top off its base by :data:`_SIDED_LEAN` of its
-        radius or more: its shadow is a hull with no single side to follow).
+        leaning cylinder (whose shadow is a hull with no single side to follow).
     """
     owner, depth = footprint_depths(points, shapes, sizes, positions, rotations)
     out = np.zeros((len(points), 2))
     for o in range(len(shapes)):
         r = rotations[o]
         is_box = shapes[o] == 0
-        if not is_box and not _is_sided(shapes[o], r, sizes[o]):
+        if not is_box and not _is_disc(shapes[o], r, sizes[o]):
             continue  # a leaning cylinder
         normals, reach, count = (
             _box_edges(r, sizes[o]) if is_box else (np.zeros((3, 2)), np.zeros(3), 0)

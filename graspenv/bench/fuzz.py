@@ -24,7 +24,6 @@ table stay their own).
 
 from __future__ import annotations
 
-import csv
 import functools
 import math
 import time
@@ -36,6 +35,7 @@ import numpy as np
 
 from graspenv.bench.invariants import InvariantChecker, Tolerances, hand_speed
 from graspenv.bench.jobs import run_jobs
+from graspenv.bench.results import write_rows
 from graspenv.config import (
     ObjectConfig,
     SceneConfig,
@@ -308,25 +308,21 @@ class FuzzReport:
         )
 
     def write(self, path: Path) -> Path:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with path.open("w", newline="") as f:
-            writer = csv.writer(f)
-            writer.writerow(
-                ["seed", "preset", "broken", "first_violation", "episode", "seconds", "deepest_mm"]
-            )
-            for o in self.outcomes:
-                writer.writerow(
-                    [
-                        o.seed,
-                        self.preset,
-                        " ".join(o.broken),
-                        o.first,
-                        o.description,
-                        f"{o.seconds:.3f}",
-                        f"{o.deepest_mm:.4f}" if math.isfinite(o.deepest_mm) else "",
-                    ]
-                )
-        return path
+        return write_rows(
+            [
+                {
+                    "seed": o.seed,
+                    "preset": self.preset,
+                    "broken": " ".join(o.broken),
+                    "first_violation": o.first,
+                    "episode": o.description,
+                    "seconds": f"{o.seconds:.3f}",
+                    "deepest_mm": f"{o.deepest_mm:.4f}" if math.isfinite(o.deepest_mm) else "",
+                }
+                for o in self.outcomes
+            ],
+            path,
+        )
 
 
 def run_fuzz(

@@ -11,7 +11,6 @@ sample taken after the first tenth of the run (allocators and caches settle firs
 
 from __future__ import annotations
 
-import csv
 import math
 import time
 from collections.abc import Callable
@@ -22,6 +21,7 @@ import numpy as np
 
 from graspenv.bench.interactions import BOX, pinch, with_objects
 from graspenv.bench.invariants import InvariantChecker, hand_speed
+from graspenv.bench.results import write_rows
 from graspenv.bench.scenarios import DEPTH
 from graspenv.config import SceneConfig, load_config
 from graspenv.simulation import Simulation
@@ -69,12 +69,7 @@ class SoakResult:
         )
 
     def write(self, path: Path) -> Path:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with path.open("w", newline="") as f:
-            writer = csv.writer(f)
-            writer.writerow(["frame", "rss_mb"])
-            writer.writerows(self.rss)
-        return path
+        return write_rows([{"frame": f, "rss_mb": mb} for f, mb in self.rss], path)
 
 
 def soak(

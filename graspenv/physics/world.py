@@ -752,12 +752,12 @@ class PhysicsWorld(Closeable):
         goes on the top face rather than into the side, and one that fits under an
         overhang (beside a ball) rests on the table. A point outside every footprint
         but within two radii of a box's or an upright cylinder's side is moved out
-        along the side's outward normal until its sphere clears it and put on what
-        lies under its centre, the table: Bullet's box meets a ray up to 0.6 mm past
-        its side, so the disc's rays put such a particle on the top face with its
-        centre off it, and it rolled off the edge and hung wedged on the side
-        (docs/design.md, "Particles put down beside a side or a neighbour"). No
-        move by a leaning cylinder (no side to follow) nor by a ball.
+        along the side's outward normal until its sphere clears it, onto the table:
+        the disc's rays (Bullet's box meets one up to 0.6 mm past its side) put it
+        on the top face, centre off it, and it rolled off and hung wedged on the
+        side (docs/design.md, "Particles put down beside a side or a neighbour").
+        No move by a ball, nor by a cylinder leaning by 1 µm (no side; given one,
+        particles beside a rocked heavy cylinder's foot flung it: fuzz seed 9947).
 
         Args:
             xy: points, metres, world frame, shape (N, 2).

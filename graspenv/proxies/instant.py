@@ -60,11 +60,11 @@ class InstantProxies:
         # Each particle keeps the pixel's image velocity for one frame.
         targets = 2.0 * now - before
         ids = pool.acquire(len(pixels))
-        # Where the pixel is, on the object's top wherever the disc's rays meet it:
-        # moved out to clear a side (as the persistent proxies put down a new
-        # point), the particles just outside a squeezed side gripped it, and the
-        # canonical turn ended 7.8° short instead of 43° (the paper's baseline
-        # cannot hold a turn: README, "The paper's interactions, measured").
+        # Where the pixel is, on the object's top wherever the disc's rays meet it.
+        # Moved out to clear a side instead (as the persistent proxies put a new
+        # point down), the particles just outside a squeezed side gripped it and
+        # the canonical turn ended 7.8° short instead of 43°; the paper's baseline
+        # cannot hold a turn (README, "The paper's interactions, measured").
         pool.place(ids, self._world.put_down(now, clear_sides=False))
         self._particles = ids
         return ProxyCommand(ids[:, None], targets, np.zeros(len(ids)))

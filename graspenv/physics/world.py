@@ -744,8 +744,7 @@ class PhysicsWorld(Closeable):
         return max(self.scene.physics.control_time, frame_dt / self.substeps)
 
     def put_down(self, xy: ArrayLike, clear_sides: bool = True) -> NDArray[np.float64]:
-        """Where a particle lowered from above onto each point is put: its sphere's
-        centre, metres, shape (N, 3).
+        """Where a particle lowered onto each point goes: its centre, metres, (N, 3).
 
         It rests on the highest surface under its disc (rays from its centre and four
         points 0.9 radius around it), so a particle whose sphere would overlap a side
@@ -761,25 +760,26 @@ class PhysicsWorld(Closeable):
 
         Args:
             xy: points, metres, world frame, shape (N, 2).
-            clear_sides: move points beside a side out (if not, every particle rests
-                where its disc's rays say, as the paper's instant proxies do).
+            clear_sides: move points beside a side out (if not, each rests where
+                its disc's rays say, as the paper's instant proxies' do).
         """
         points = np.array(xy, dtype=float).reshape(-1, 2)
         radius = self.pool.radius
-        owner, depth = self.footprint_depth(points)
-        beside = clear_sides & (owner >= 0) & (depth <= 0.0) & (depth > -2.0 * radius)
-        near = np.flatnonzero(beside)
-        balls = np.array([o.shape == "sphere" for o in self.scene.objects], bool)
-        near = near[~balls[owner[near]]]
-        outward = self.footprint_normal(points[near], 2.0 * radius)
-        sided = np.any(outward != 0.0, axis=1)
-        near, outward = near[sided], outward[sided]
-        points[near] += np.maximum(radius + depth[near], 0.0)[:, None] * outward
-        beside = np.zeros(len(points), bool)
-        beside[near] = True
+        near = np.zeros(0, np.intp)  # the points moved out beside a side
+        if clear_sides:
+            owner, depth = self.footprint_depth(points)
+            near = np.flatnonzero((owner >= 0) & (depth <= 0.0) & (depth > -2.0 * radius))
+            balls = np.array([o.shape == "sphere" for o in self.scene.objects], bool)
+            near = near[~balls[owner[near]]]
+            outward = self.footprint_normal(points[near], 2.0 * radius)
+            sided = np.any(outward != 0.0, axis=1)
+            near, outward = near[sided], outward[sided]
+            points[near] += np.maximum(radius + depth[near], 0.0)[:, None] * outward
+        rest = np.ones(len(points), bool)
+        rest[near] = False
         bottom = np.empty(len(points))
-        bottom[~beside] = self._rest_heights(points[~beside])
-        bottom[beside] = self.ray_heights(points[beside]).height
+        bottom[rest] = self._rest_heights(points[rest])
+        bottom[near] = self.ray_heights(points[near]).height
         return np.column_stack([points, bottom + radius])
 
     def _rest_heights(self, points: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -22,7 +22,7 @@ __all__ = [
     "convex_hull",
     "footprint",
     "footprint_depths",
-    "footprint_normals",
+    "footprint_sides",
     "inscribed_radius",
     "less_along",
     "not_into",
@@ -295,28 +295,31 @@ def _nearest_edge(
 
 
 @njit
-def footprint_normals(
+def footprint_sides(
     points: NDArray[np.float64],
     shapes: NDArray[np.int64],
     sizes: NDArray[np.float64],
     positions: NDArray[np.float64],
     rotations: NDArray[np.float64],
     near: float,
-) -> NDArray[np.float64]:
-    """The table-plane outward normal of the nearest object's side at each point: the
-    normal of the box shadow's edge nearest the point, or the radial direction of a
-    sphere's or an upright cylinder's disc (:func:`footprint_depths` says which object
-    is nearest and how deep the point lies).
+) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+    """The nearest object's side at each point: :func:`footprint_depths`' object and
+    depth, and the side's table-plane outward normal there (the normal of the box
+    shadow's edge nearest the point, or the radial direction of a sphere's or an
+    upright cylinder's disc).
 
     Args:
         points, shapes, sizes, positions, rotations: as :func:`footprint_depths`.
-        near: points farther outside every footprint than this, metres, get none.
+        near: points farther outside every footprint than this, metres, get no
+            normal.
 
     Returns:
-        Unit normals pointing out of the object, shape (N, 2) (on a box's centre line
-        through an edge pair, either of the pair's); zero where there is none:
-        a point farther than ``near`` from every object, at a disc's centre, or by a
-        leaning cylinder (whose shadow is a hull with no single side to follow).
+        (object, depth, normal): the first two as :func:`footprint_depths` gives
+        them, then unit normals pointing out of the object, shape (N, 2) (on a box's
+        centre line through an edge pair, either of the pair's); zero where there
+        is none: a point farther than ``near`` from every object, at a disc's
+        centre, or by a leaning cylinder (whose shadow is a hull with no single side
+        to follow).
     """
     owner, depth = footprint_depths(points, shapes, sizes, positions, rotations)
     out = np.zeros((len(points), 2))
@@ -342,7 +345,7 @@ def footprint_normals(
                 length = np.hypot(dx, dy)
                 if length > 0.0:
                     out[k, 0], out[k, 1] = dx / length, dy / length
-    return out
+    return owner, depth, out
 
 
 @njit

@@ -46,7 +46,7 @@ import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
 
 from graspenv.config import SceneConfig
-from graspenv.geometry import footprint_depths, footprint_normals
+from graspenv.geometry import footprint_depths, footprint_sides
 from graspenv.physics.bodies import EDGE_RADIUS, build_scene, place_objects
 from graspenv.physics.control import REST_TOLERANCE, ParticleDrive, SupportPlanes
 from graspenv.physics.pool import ParticlePool
@@ -529,19 +529,15 @@ class PhysicsWorld(Closeable):
         """
         return footprint_depths(*self._footprints(xy))
 
-    def footprint_normal(self, xy: ArrayLike, near: float) -> NDArray[np.float64]:
-        """The table-plane outward normal of the nearest object's side at each point
-        (a box shadow's nearest edge, a disc's radius), zero farther than ``near``
-        metres outside every footprint (:func:`~graspenv.geometry.footprint_normals`).
-
-        Args:
-            xy: points, metres, world frame, shape (N, 2).
-            near: metres.
-
-        Returns:
-            Unit normals pointing out of the object, or zero rows, shape (N, 2).
-        """
-        return footprint_normals(*self._footprints(xy), near)
+    def footprint_side(
+        self, xy: ArrayLike, near: float
+    ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`footprint_depth`'s object and depth, and the table-plane outward
+        normal of the nearest object's side at each point of ``xy`` (N, 2), metres (a
+        box shadow's nearest edge, a disc's radius; a zero row with no side or farther
+        than ``near`` metres outside every footprint), from one pass over the
+        footprints (:func:`~graspenv.geometry.footprint_sides`)."""
+        return footprint_sides(*self._footprints(xy), near)
 
     def _footprints(
         self, xy: ArrayLike
@@ -736,7 +732,7 @@ class PhysicsWorld(Closeable):
         substep = frame_dt / self.substeps
         if not self.scene.physics.stiff_tangent or substep >= control_dt:
             return None, None
-        return substep, self.footprint_normal(goal[:, :2], 2.0 * self.pool.radius)
+        return substep, self.footprint_side(goal[:, :2], 2.0 * self.pool.radius)[2]
 
     def _control_dt(self, frame_dt: float) -> float:
         """The control law's Δt for a frame of ``frame_dt`` seconds: the configured
@@ -767,11 +763,11 @@ class PhysicsWorld(Closeable):
         radius = self.pool.radius
         near = np.zeros(0, np.intp)  # the points moved out beside a side
         if clear_sides:
-            owner, depth = self.footprint_depth(points)
+            owner, depth, outward = self.footprint_side(points, 2.0 * radius)
             near = np.flatnonzero((owner >= 0) & (depth <= 0.0) & (depth > -2.0 * radius))
             balls = np.array([o.shape == "sphere" for o in self.scene.objects], bool)
             near = near[~balls[owner[near]]]
-            outward = self.footprint_normal(points[near], 2.0 * radius)
+            outward = outward[near]
             sided = np.any(outward != 0.0, axis=1)
             near, outward = near[sided], outward[sided]
             points[near] += np.maximum(radius + depth[near], 0.0)[:, None] * outward

@@ -156,11 +156,15 @@ class _Sides(NamedTuple):
         at: where their bottom particles are, metres, world frame, (N, 3).
         normal: the table-plane outward normal of the nearest object's side at each
             particle within two particle radii, or a zero row, (N, 2).
+        nearest, off: the object nearest each particle and how deep the particle's
+            centre lies in its footprint, metres, negative outside, (N,) each.
     """
 
     rows: NDArray[np.intp]
     at: NDArray[np.float64]
     normal: NDArray[np.float64]
+    nearest: NDArray[np.int64]
+    off: NDArray[np.float64]
 
 
 class PersistentProxies:
@@ -338,7 +342,7 @@ class PersistentProxies:
             # face's edge into the air beside the side.
             on_table = np.flatnonzero(start[:, 0, 2] < pool.radius + REST_TOLERANCE)
             offset = current[beside[on_table]] - current[anchors[on_table]]
-            outward = self._world.footprint_normal(start[on_table, 0, :2], 2.0 * pool.radius)
+            outward = self._world.footprint_side(start[on_table, 0, :2], 2.0 * pool.radius)[2]
             start[on_table, :, :2] += not_into(offset, outward)[:, None, :]
         if beside.size:
             ids = pool.acquire(beside.size * layers).reshape(-1, layers)
@@ -439,7 +443,8 @@ class PersistentProxies:
         at = world.pool.positions(particles[rows, 0])
         # The nearest footprint's side within two radii of the particle (none at a
         # disc's centre or by a leaning cylinder).
-        return _Sides(rows, at, world.footprint_normal(at[:, :2], 2.0 * world.pool.radius))
+        nearest, off, normal = world.footprint_side(at[:, :2], 2.0 * world.pool.radius)
+        return _Sides(rows, at, normal, nearest, off)
 
     def _holds_after(
         self,
@@ -477,14 +482,12 @@ class PersistentProxies:
         """
         world = self._world
         pool = world.pool
-        rows, at, outward = sides
-        keep = ~born[rows] & (at[:, 2] < pool.radius + REST_TOLERANCE) & ~np.isin(rows, lifted)
-        rows, at, outward = rows[keep], at[keep, :2], outward[keep]
+        rows, at, outward, nearest, off = sides
         # The side a particle presses is its nearest object's; with two objects
         # close together that may not be the one its point lies in.
-        nearest, off = world.footprint_depth(at)
-        beside = nearest == owner[rows]
-        rows, at, outward, off = rows[beside], at[beside], outward[beside], off[beside]
+        keep = ~born[rows] & (at[:, 2] < pool.radius + REST_TOLERANCE) & ~np.isin(rows, lifted)
+        keep &= nearest == owner[rows]
+        rows, at, outward, off = rows[keep], at[keep, :2], outward[keep], off[keep]
         contact = track_of[rows]
         shortfall = pool.last_targets(particles[rows, 0]) - hold[contact] - at
         body = owner[rows]
@@ -571,7 +574,7 @@ class PersistentProxies:
         """
         world = self._world
         margin, radius = self._proxy.penetration_margin, world.pool.radius
-        inside, at, normal = sides
+        inside, at, normal = sides.rows, sides.at, sides.normal
         nothing = np.zeros(0, np.intp)
         if inside.size == 0:
             return nothing

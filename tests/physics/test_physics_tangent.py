@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from graspenv.config import load_config
-from graspenv.geometry import SHAPE_CODES, footprint_normals
+from graspenv.geometry import SHAPE_CODES, footprint_sides
 from graspenv.physics import PhysicsWorld
 from graspenv.physics.control import ParticleDrive, SupportPlanes
 from tests.physics._helpers import squeeze_and_turn
@@ -29,14 +29,14 @@ def _rotation(yaw: float, roll: float = 0.0) -> np.ndarray:
 def _normals(
     points: list[list[float]], shape: str, size: tuple[float, ...], rotation: np.ndarray
 ) -> np.ndarray:
-    return footprint_normals(
+    return footprint_sides(
         np.array(points, float),
         np.array([SHAPE_CODES[shape]]),
         np.array([[*size, 0.0, 0.0][:3]], float),
         np.array([[0.01, -0.02, 0.015]]),
         rotation,
         NEAR,
-    )
+    )[2]
 
 
 def test_a_box_side_gives_its_own_outward_normal_inside_and_just_outside() -> None:

@@ -81,7 +81,7 @@ def test_footprint_normal_is_the_nearest_side_and_none_far_away(world: PhysicsWo
         [0.003, BOX_HALF + 0.003],
         [BOX_HALF + 0.01, 0.0],
     ]
-    normal = world.footprint_normal(points, near=0.004)
+    normal = world.footprint_side(points, near=0.004)[2]
     expected = [[1.0, 0.0], [0.0, -1.0], [-1.0, 0.0], [0.0, 1.0], [0.0, 0.0]]
     np.testing.assert_allclose(normal, expected, atol=1e-9)
 

@@ -60,7 +60,7 @@ def _along_the_edge(overlap: float, travel: float = 0.024, frames: int = 30) -> 
             rows = inside & ~top
             if not rows.any():
                 continue
-            normal = sim.world.footprint_normal(at[rows, :2], 2.0 * radius)
+            normal = sim.world.footprint_side(at[rows, :2], 2.0 * radius)[2]
             offset = at[rows, :2] - command.targets[rows]
             behind = np.abs(np.einsum("ij,ij->i", offset, normal)) - radius
             deepest = max(deepest, float(behind.max()))

@@ -343,6 +343,13 @@ class ProxyConfig:
             under dropout holes the turn errs more than without it (README, "The
             side hold"). A hold time of a frame or less takes up the whole
             shortfall each frame; only the ``persistent`` method has it.
+        share_side_load: a fingertip's particles pressing one object's side share
+            its load along the side by how deep they press, as one rigid contact
+            (step 8 of :mod:`graspenv.proxies.persistent`): without it each stuck
+            particle carries the same load, the least pressed slip first and the
+            grip creeps before it slips, and round a curved side that creep costs
+            or gains normal force (README, "A fingertip shares its side load").
+            Only the ``persistent`` method has it.
         instant_stride: pixel subsample of the instant method's gradient pixels.
         rigid_height: height of the rigid method's contact bodies, metres.
     """
@@ -370,6 +377,7 @@ class ProxyConfig:
     smoothing: float = 1.0
     smoothing_gate: float = 0.003
     hold_time: float = 0.0
+    share_side_load: bool = True
     instant_stride: int = 2
 
     def __post_init__(self) -> None:

@@ -60,6 +60,11 @@ real fingertip. One camera frame:
    object cannot wind up against each other. A contact that presses no side lets
    its hold go at the same rate. Particles put down this frame start at their
    points and reach the shifted targets in the frame.
+8. *Shared side load* (``proxy.share_side_load``). A fingertip's particles pressing
+   one object's side share its load along the side by how deep they press, as one
+   rigid contact: their targets' summed offset along the side is kept and dealt
+   out by depth, so all reach their friction limit together instead of the least
+   pressed slipping first (:func:`~graspenv.proxies.side_hold.shared_side_load`).
 
 With ``track_hand_rotation`` and ``predicted_resampling`` both off this is the
 paper's plain form: the raw previous contour matched against the tracker's contour
@@ -82,7 +87,7 @@ from graspenv.jit import njit
 from graspenv.physics.control import REST_TOLERANCE
 from graspenv.physics.world import PhysicsWorld
 from graspenv.proxies.base import ProxyCommand, rotation_kernel
-from graspenv.proxies.side_hold import side_hold
+from graspenv.proxies.side_hold import shared_side_load, side_hold
 
 __all__ = ["PersistentProxies"]
 
@@ -206,6 +211,7 @@ class PersistentProxies:
         # particles' offset (the squeeze, up to the penetration margin) before it
         # slips, no more than this with an object's friction of up to 1.
         self._hold_most = proxy.particle_friction * proxy.penetration_margin
+        self._share = proxy.share_side_load
 
     def reset(self) -> None:
         self._tracks = _Tracks.empty(self._layers)
@@ -260,7 +266,8 @@ class PersistentProxies:
         sizes = np.diff(tracks.contours.bounds)
         spin = np.repeat(np.where(plan.follows, plan.motion.turn / self._dt, 0.0), sizes)
         particles, targets, born = tracks.particles, tracks.contours.points, tracks.born
-        if self._cull or proxy.penetration_limit or self._hold_gain > 0.0:
+        sided = proxy.penetration_limit or self._hold_gain > 0.0 or self._share
+        if self._cull or sided:
             owner, depth = self._world.footprint_depth(targets)
         culled = 0
         if self._cull:
@@ -274,20 +281,22 @@ class PersistentProxies:
             owner, depth = owner[embodied], depth[embodied]
         else:
             particles, targets, born = particles.copy(), targets.copy(), born.copy()
-        if proxy.penetration_limit or self._hold_gain > 0.0:
+        if sided:
             sides = self._pressing(particles, owner, depth)
         lifted = np.zeros(0, np.intp)
         if proxy.penetration_limit:
             lifted = self._limit_penetration(particles, targets, depth, sides)
+        track_of = np.repeat(np.arange(len(tracks.ids)), sizes)
+        if self._cull:
+            track_of = track_of[embodied]
         if self._hold_gain > 0.0:
-            track_of = np.repeat(np.arange(len(tracks.ids)), sizes)
-            if self._cull:
-                track_of = track_of[embodied]
             # In place, as the culling: the tracks keep the new hold.
             tracks.hold[:] = self._holds_after(
                 tracks.hold, track_of, particles, born, owner, sides, lifted
             )
             targets = targets + tracks.hold[track_of]
+        if self._share:
+            targets = self._shared(targets, track_of, owner, sides, lifted)
         return ProxyCommand(particles, targets, spin, culled=culled, born=born)
 
     # -- stages ------------------------------------------------------------------------
@@ -482,11 +491,8 @@ class PersistentProxies:
         """
         world = self._world
         pool = world.pool
-        rows, at, outward, nearest, off = sides
-        # The side a particle presses is its nearest object's; with two objects
-        # close together that may not be the one its point lies in.
-        keep = ~born[rows] & (at[:, 2] < pool.radius + REST_TOLERANCE) & ~np.isin(rows, lifted)
-        keep &= nearest == owner[rows]
+        rows, at, outward, _, off = sides
+        keep = ~born[rows] & self._beside(sides, owner, lifted)
         rows, at, outward, off = rows[keep], at[keep, :2], outward[keep], off[keep]
         contact = track_of[rows]
         shortfall = pool.last_targets(particles[rows, 0]) - hold[contact] - at
@@ -499,6 +505,40 @@ class PersistentProxies:
         return side_hold(
             hold, self._hold_gain, contact, shortfall, outward, body, arm, self._hold_most
         )
+
+    def _beside(
+        self, sides: _Sides, owner: NDArray[np.int64], lifted: NDArray[np.intp]
+    ) -> NDArray[np.bool_]:
+        """Which of ``sides``' rows press the side of the object their point lies in:
+        the particle stands on the table (not on a top face, nor lifted there this
+        frame) and that object is the one nearest it (with two objects close
+        together it may not be)."""
+        on_table = sides.at[:, 2] < self._world.pool.radius + REST_TOLERANCE
+        return on_table & ~np.isin(sides.rows, lifted) & (sides.nearest == owner[sides.rows])
+
+    def _shared(
+        self,
+        targets: NDArray[np.float64],
+        track_of: NDArray[np.intp],
+        owner: NDArray[np.int64],
+        sides: _Sides,
+        lifted: NDArray[np.intp],
+    ) -> NDArray[np.float64]:
+        """``targets`` with each contact's load along each object's side shared by its
+        particles' depths (step 8 of the module docstring), where they press a side
+        (:meth:`_beside`)."""
+        keep = self._beside(sides, owner, lifted) & np.any(sides.normal != 0.0, axis=1)
+        rows, body = sides.rows[keep], owner[sides.rows[keep]]
+        objects = self._world.scene.objects
+        friction = self._proxy.particle_friction * np.array([o.friction for o in objects])
+        targets = targets.copy()
+        targets[rows] += shared_side_load(
+            targets[rows] - sides.at[keep, :2],
+            sides.normal[keep],
+            track_of[rows] * len(objects) + body,
+            friction[body],
+        )
+        return targets
 
     def _release(self, particles: NDArray[np.int64]) -> None:
         """Give back the particles of some rows of a track (culled rows have none)."""

@@ -1,4 +1,16 @@
-"""The side hold (``proxy.hold_time``; step 7 of :mod:`graspenv.proxies.persistent`).
+"""A fingertip's load along an object's side: its share among the particles
+(``proxy.share_side_load``; step 8 of :mod:`graspenv.proxies.persistent`), and the
+side hold (``proxy.hold_time``; step 7).
+
+A rigid fingertip's contact has one normal force and one friction force, so it slips
+when the load along the side reaches μ times the normal force. Under the contact
+law each particle presses with k·d for a depth d and pulls along the side with k·e
+for an offset e along it, one stiffness k: particles stuck to one side carry the
+same e, the least pressed reach their limit (e = μ·d) first and slide while the
+rest hold, and the grip creeps in partial slip (README, "A fingertip shares its side
+load"). :func:`shared_side_load` shares each fingertip's load by depth instead.
+
+The side hold:
 
 A fingertip is rigid: under a steady load along an object's side its particles
 should stay where the hand puts them, not give by the load over the contact law's
@@ -17,7 +29,7 @@ from numpy.typing import NDArray
 
 from graspenv.geometry import less_along
 
-__all__ = ["WRAPPED_NORMAL", "rigid_part", "side_hold"]
+__all__ = ["WRAPPED_NORMAL", "rigid_part", "shared_side_load", "side_hold"]
 
 #: The side hold counts a contact only where its particles' side normals add up to
 #: at least this share of their number (an arc of up to about 150° either side of
@@ -145,3 +157,57 @@ def rigid_part(
     )
     fitted = np.einsum("ij,ij->i", seen, motion[body])
     return fitted[:, None] * tangent
+
+
+def shared_side_load(
+    reach: NDArray[np.float64],
+    outward: NDArray[np.float64],
+    group: NDArray[np.int64],
+    friction: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """The shifts of particles' targets along their sides that share each group's
+    load along the side by depth, as a rigid fingertip's contact does.
+
+    A group is one fingertip's particles on one object's side. Each particle's target
+    lies ``reach`` from it: its part along the particle's own side normal, the
+    depth d (inward), sets how hard it presses, its part e along the side how hard
+    it pulls along it. Within a group the particles that press (d > 0) keep the
+    sum of their e, but each gets the share d / Σd of it: the group's load along the
+    side is unchanged, and every particle is at the same share of its friction
+    limit, so they slip together when the load reaches μ·Σd. What a squeeze alone
+    puts along the particles round a curved side, opposite either side of the
+    middle, cancels. Left as they are: a group whose normals nearly cancel (wrapped
+    round an object, :data:`WRAPPED_NORMAL`), and one whose load is at or beyond its
+    friction limit, which slides, each particle on its own.
+
+    Args:
+        reach: each particle's target less where it is, metres, world frame, (N, 2).
+        outward: its side's unit outward normal, (N, 2), no zero row.
+        group: each particle's group, any integers, (N,).
+        friction: its friction coefficient against the side (Bullet's product of
+            the two), (N,).
+
+    Returns:
+        The shift of each target along its side, metres, world frame, (N, 2).
+    """
+    tangent = np.column_stack([-outward[:, 1], outward[:, 0]])
+    along = np.einsum("ij,ij->i", reach, tangent)
+    deep = -np.einsum("ij,ij->i", reach, outward)
+    shift = np.zeros_like(reach)
+    press = np.flatnonzero(deep > 0.0)
+    if press.size == 0:
+        return shift
+    along, deep, friction = along[press], deep[press], friction[press]
+    _, group = np.unique(group[press], return_inverse=True)
+    count = np.bincount(group)
+    normal = np.zeros((count.size, 2))
+    np.add.at(normal, group, outward[press])
+    load = np.bincount(group, along)
+    depth = np.bincount(group, deep)
+    limit = np.bincount(group, friction * deep)
+    shared = (np.hypot(normal[:, 0], normal[:, 1]) >= WRAPPED_NORMAL * count) & (
+        np.abs(load) < limit
+    )
+    share = np.where(shared[group], deep * load[group] / depth[group] - along, 0.0)
+    shift[press] = share[:, None] * tangent[press]
+    return shift

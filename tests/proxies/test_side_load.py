@@ -1,0 +1,78 @@
+"""A fingertip's load along an object's side, shared among its particles by depth
+(``proxy.share_side_load``): one rigid contact, whose particles reach their friction
+limit together."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from graspenv.proxies.side_hold import shared_side_load
+
+MU = 1.0
+
+
+def _tangent(outward: np.ndarray) -> np.ndarray:
+    return np.column_stack([-outward[:, 1], outward[:, 0]])
+
+
+def _reach(outward: np.ndarray, depth: list[float], along: list[float]) -> np.ndarray:
+    """Targets ``depth`` inside each side and ``along`` it from the particles."""
+    return -np.array(depth)[:, None] * outward + np.array(along)[:, None] * _tangent(outward)
+
+
+def _after(reach: np.ndarray, outward: np.ndarray, group: list[int] | None = None) -> np.ndarray:
+    """Each target's offset along its side after sharing."""
+    groups = np.zeros(len(reach), np.int64) if group is None else np.array(group)
+    shifted = reach + shared_side_load(reach, outward, groups, np.full(len(reach), MU))
+    return np.einsum("ij,ij->i", shifted, _tangent(outward))
+
+
+def test_a_face_shares_its_load_by_depth_and_keeps_its_sum() -> None:
+    outward = np.tile([1.0, 0.0], (3, 1))
+    depth, along = [0.001, 0.002, 0.003], [0.0004, -0.0002, 0.0003]
+    reach = _reach(outward, depth, along)
+    shift = shared_side_load(reach, outward, np.zeros(3, np.int64), np.full(3, MU))
+    # Along the side only: how hard each presses is left alone.
+    np.testing.assert_allclose(np.einsum("ij,ij->i", shift, outward), 0.0, atol=1e-15)
+    after = _after(reach, outward)
+    np.testing.assert_allclose(after.sum(), sum(along), rtol=1e-12)
+    np.testing.assert_allclose(after / np.array(depth), sum(along) / sum(depth), rtol=1e-12)
+
+
+def test_a_squeeze_round_a_curve_puts_no_load_along_it() -> None:
+    """Particles either side of the middle of a fingertip's arc on a cylinder, pulled
+    along the side in opposite directions by the squeeze alone, stand at none."""
+    angles = np.radians([-20.0, -10.0, 0.0, 10.0, 20.0])
+    outward = np.column_stack([-np.cos(angles), np.sin(angles)])
+    depth = [0.001, 0.0025, 0.003, 0.0025, 0.001]
+    reach = _reach(outward, depth, [-0.0006, -0.0003, 0.0, 0.0003, 0.0006])
+    np.testing.assert_allclose(_after(reach, outward), 0.0, atol=1e-15)
+
+
+def test_a_sliding_contact_and_one_wrapped_round_an_object_are_left_alone() -> None:
+    outward = np.tile([0.0, 1.0], (2, 1))
+    depth = [0.001, 0.002]
+    # Beyond the friction limit (μ·Σd = 3 mm): it slides, each particle on its own.
+    sliding = _reach(outward, depth, [0.001, 0.0025])
+    np.testing.assert_allclose(_after(sliding, outward), [0.001, 0.0025])
+    # Just within it, shared.
+    stuck = _reach(outward, depth, [0.001, 0.0019])
+    np.testing.assert_allclose(_after(stuck, outward), [0.0029 / 3, 0.0058 / 3], rtol=1e-9)
+    # Four sides of a small object facing every way: no one side to share along.
+    around = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+    wrapped = _reach(around, [0.001, 0.002, 0.001, 0.002], [0.0004, 0.0, -0.0001, 0.0002])
+    np.testing.assert_allclose(_after(wrapped, around), [0.0004, 0.0, -0.0001, 0.0002])
+
+
+def test_a_particle_that_does_not_press_keeps_its_target_and_takes_no_share() -> None:
+    outward = np.tile([1.0, 0.0], (3, 1))
+    reach = _reach(outward, [0.002, -0.0005, 0.002], [0.0003, 0.0009, -0.0001])
+    np.testing.assert_allclose(_after(reach, outward), [0.0001, 0.0009, 0.0001], rtol=1e-9)
+
+
+def test_groups_share_apart() -> None:
+    outward = np.tile([1.0, 0.0], (4, 1))
+    reach = _reach(outward, [0.001, 0.003, 0.002, 0.002], [0.0004, 0.0, 0.0002, -0.0002])
+    np.testing.assert_allclose(
+        _after(reach, outward, [0, 0, 7, 7]), [0.0001, 0.0003, 0.0, 0.0], atol=1e-15
+    )

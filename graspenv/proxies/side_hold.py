@@ -176,9 +176,11 @@ def shared_side_load(
     side is unchanged, and every particle is at the same share of its friction
     limit, so they slip together when the load reaches μ·Σd. What a squeeze alone
     puts along the particles round a curved side, opposite either side of the
-    middle, cancels. Left as they are: a group whose normals nearly cancel (wrapped
-    round an object, :data:`WRAPPED_NORMAL`), and one whose load is at or beyond its
-    friction limit, which slides, each particle on its own.
+    middle, cancels. Left as they are: a particle whose own offset from its
+    group's mean is more than its friction holds (it slides back towards its point
+    on its own), a group whose normals nearly cancel (wrapped round an object,
+    :data:`WRAPPED_NORMAL`), and one whose load is at or beyond its friction limit,
+    which slides, each particle on its own.
 
     Args:
         reach: each particle's target less where it is, metres, world frame, (N, 2).
@@ -195,6 +197,13 @@ def shared_side_load(
     deep = -np.einsum("ij,ij->i", reach, outward)
     shift = np.zeros_like(reach)
     press = np.flatnonzero(deep > 0.0)
+    # A particle further from its place in the contact (its offset less its group's
+    # mean) than its own friction holds is not stuck with the rest: it slides back
+    # towards its point as before (else particles could drift along a held side,
+    # ever further from their points, and bunch).
+    _, first = np.unique(group[press], return_inverse=True)
+    mean = np.bincount(first, along[press]) / np.bincount(first)
+    press = press[np.abs(along[press] - mean[first]) <= friction[press] * deep[press]]
     if press.size == 0:
         return shift
     along, deep, friction = along[press], deep[press], friction[press]

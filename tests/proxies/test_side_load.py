@@ -76,3 +76,11 @@ def test_groups_share_apart() -> None:
     np.testing.assert_allclose(
         _after(reach, outward, [0, 0, 7, 7]), [0.0001, 0.0003, 0.0, 0.0], atol=1e-15
     )
+
+
+def test_a_particle_further_from_its_place_than_its_friction_holds_is_not_shared() -> None:
+    """Its offset less the group's mean is beyond μ·d: it would slide back towards its
+    point on its own, so it keeps its target and the others share theirs."""
+    outward = np.tile([1.0, 0.0], (3, 1))
+    reach = _reach(outward, [0.002, 0.002, 0.0005], [0.0002, 0.0, 0.0016])
+    np.testing.assert_allclose(_after(reach, outward), [0.0001, 0.0001, 0.0016], rtol=1e-9)

@@ -85,7 +85,7 @@ GUARDS = [
     # 2.73 m/s against a bound of 1.81): the case is 6 mm now. Since each
     # fingertip's load along a side is shared by its particles' depths
     # (proxy.share_side_load, 2026-12-06) the pinch keeps every invariant without
-    # the guard at 4, 5, 6 and 6.5 mm (fastest 1.56 m/s against 1.80, 0.57 mm in at
+    # the guard at 4, 5, 6 and 6.5 mm (fastest 1.56 m/s against 1.80, 0.82 mm in at
     # most), and a 10 g box at 6 mm: the case is measured with the sharing off.
     # The guard stays for the heavy objects' grip ("Particles outweighed light
     # objects" in the README: the grid's worst turn 2.25° without it, 0.70° with it,

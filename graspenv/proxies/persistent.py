@@ -87,7 +87,7 @@ from graspenv.jit import njit
 from graspenv.physics.control import REST_TOLERANCE
 from graspenv.physics.world import PhysicsWorld
 from graspenv.proxies.base import ProxyCommand, rotation_kernel
-from graspenv.proxies.side_hold import shared_side_load, side_hold
+from graspenv.proxies.side_hold import Sides, holds_after, pressing, shared_targets
 
 __all__ = ["PersistentProxies"]
 
@@ -151,25 +151,6 @@ class _Tracks(NamedTuple):
             np.zeros((0, layers), np.int64), np.zeros(0, bool), points, np.zeros(0),
             _Smoothed(points, points), points,
         )  # fmt: skip
-
-
-class _Sides(NamedTuple):
-    """The rows of a frame whose points lie inside an object's footprint.
-
-    Attributes:
-        rows: their indices, (N,).
-        at: where their bottom particles are, metres, world frame, (N, 3).
-        normal: the table-plane outward normal of the nearest object's side at each
-            particle within two particle radii, or a zero row, (N, 2).
-        nearest, off: the object nearest each particle and how deep the particle's
-            centre lies in its footprint, metres, negative outside, (N,) each.
-    """
-
-    rows: NDArray[np.intp]
-    at: NDArray[np.float64]
-    normal: NDArray[np.float64]
-    nearest: NDArray[np.int64]
-    off: NDArray[np.float64]
 
 
 class PersistentProxies:
@@ -282,7 +263,7 @@ class PersistentProxies:
         else:
             particles, targets, born = particles.copy(), targets.copy(), born.copy()
         if sided:
-            sides = self._pressing(particles, owner, depth)
+            sides = pressing(self._world, particles, owner, depth)
         lifted = np.zeros(0, np.intp)
         if proxy.penetration_limit:
             lifted = self._limit_penetration(particles, targets, depth, sides)
@@ -291,12 +272,15 @@ class PersistentProxies:
             track_of = track_of[embodied]
         if self._hold_gain > 0.0:
             # In place, as the culling: the tracks keep the new hold.
-            tracks.hold[:] = self._holds_after(
-                tracks.hold, track_of, particles, born, owner, sides, lifted
-            )
+            tracks.hold[:] = holds_after(
+                self._world, tracks.hold, self._hold_gain, self._hold_most,
+                track_of, particles, born, owner, sides, lifted,
+            )  # fmt: skip
             targets = targets + tracks.hold[track_of]
         if self._share:
-            targets = self._shared(targets, track_of, owner, sides, lifted)
+            targets = shared_targets(
+                self._world, proxy.particle_friction, targets, track_of, owner, sides, lifted
+            )
         return ProxyCommand(particles, targets, spin, culled=culled, born=born)
 
     # -- stages ------------------------------------------------------------------------
@@ -434,112 +418,6 @@ class PersistentProxies:
             np.concatenate([followed.hold, new_hold])[order],
         )
 
-    def _pressing(
-        self, particles: NDArray[np.int64], owner: NDArray[np.int64], depth: NDArray[np.float64]
-    ) -> _Sides:
-        """The rows whose points lie inside an object's footprint, where their bottom
-        particles are and the side each is by (what the penetration limit and the
-        side hold both need, read once).
-
-        Args:
-            particles: particle ids, (K, L) stacks, bottom first.
-            owner, depth: the object whose footprint holds each point deepest and that
-                depth from its nearest side, metres, negative outside; (K,) each
-                (:meth:`~graspenv.physics.world.PhysicsWorld.footprint_depth`).
-        """
-        world = self._world
-        rows = np.flatnonzero((owner >= 0) & (depth > 0.0))
-        at = world.pool.positions(particles[rows, 0])
-        # The nearest footprint's side within two radii of the particle (none at a
-        # disc's centre or by a leaning cylinder).
-        nearest, off, normal = world.footprint_side(at[:, :2], 2.0 * world.pool.radius)
-        return _Sides(rows, at, normal, nearest, off)
-
-    def _holds_after(
-        self,
-        hold: NDArray[np.float64],
-        track_of: NDArray[np.intp],
-        particles: NDArray[np.int64],
-        born: NDArray[np.bool_],
-        owner: NDArray[np.int64],
-        sides: _Sides,
-        lifted: NDArray[np.intp],
-    ) -> NDArray[np.float64]:
-        """Each contact's side hold after this frame (step 7 of the module docstring).
-
-        A particle counts if its point lies inside an object's footprint, it was
-        not put down this frame, it stands on the table (not on a top face) and
-        that object is the one nearest it, whose side gives its outward normal
-        (:func:`~graspenv.proxies.side_hold.side_hold` leaves out those with none).
-        Its shortfall is where the hand put it last frame (its last target less its
-        contact's hold then) less where it is; a particle a merged contact
-        inherited was held with its old contact's hold, which for that one frame
-        counts as shortfall (and, through the fit, in the other contacts on the
-        same object).
-
-        Args:
-            hold: each contact's hold before this frame, metres, world frame, (T, 2).
-            track_of: each row's contact, (K,).
-            particles, born: the rows' particle stacks (K, L) and which were put
-                down this frame.
-            owner: the object whose footprint holds each point deepest, (K,).
-            sides: the rows inside a footprint (:meth:`_pressing`).
-            lifted: the rows the penetration limit put on a top face this frame.
-
-        Returns:
-            The new holds, metres, world frame, (T, 2).
-        """
-        world = self._world
-        pool = world.pool
-        rows, at, outward, _, off = sides
-        keep = ~born[rows] & self._beside(sides, owner, lifted)
-        rows, at, outward, off = rows[keep], at[keep, :2], outward[keep], off[keep]
-        contact = track_of[rows]
-        shortfall = pool.last_targets(particles[rows, 0]) - hold[contact] - at
-        body = owner[rows]
-        arm = at - world.object_states().position[body, :2]
-        # The arm to the particle's point on the side, not to its centre: particles
-        # on one face press in to depths a few micrometres apart, and seen from
-        # their centres the face would tell a turn from a shift along it.
-        arm += off[:, None] * outward
-        return side_hold(
-            hold, self._hold_gain, contact, shortfall, outward, body, arm, self._hold_most
-        )
-
-    def _beside(
-        self, sides: _Sides, owner: NDArray[np.int64], lifted: NDArray[np.intp]
-    ) -> NDArray[np.bool_]:
-        """Which of ``sides``' rows press the side of the object their point lies in:
-        the particle stands on the table (not on a top face, nor lifted there this
-        frame) and that object is the one nearest it (with two objects close
-        together it may not be)."""
-        on_table = sides.at[:, 2] < self._world.pool.radius + REST_TOLERANCE
-        return on_table & ~np.isin(sides.rows, lifted) & (sides.nearest == owner[sides.rows])
-
-    def _shared(
-        self,
-        targets: NDArray[np.float64],
-        track_of: NDArray[np.intp],
-        owner: NDArray[np.int64],
-        sides: _Sides,
-        lifted: NDArray[np.intp],
-    ) -> NDArray[np.float64]:
-        """``targets`` with each contact's load along each object's side shared by its
-        particles' depths (step 8 of the module docstring), where they press a side
-        (:meth:`_beside`)."""
-        keep = self._beside(sides, owner, lifted) & np.any(sides.normal != 0.0, axis=1)
-        rows, body = sides.rows[keep], owner[sides.rows[keep]]
-        objects = self._world.scene.objects
-        friction = self._proxy.particle_friction * np.array([o.friction for o in objects])
-        targets = targets.copy()
-        targets[rows] += shared_side_load(
-            targets[rows] - sides.at[keep, :2],
-            sides.normal[keep],
-            track_of[rows] * len(objects) + body,
-            friction[body],
-        )
-        return targets
-
     def _release(self, particles: NDArray[np.int64]) -> None:
         """Give back the particles of some rows of a track (culled rows have none)."""
         ids = particles.reshape(-1)
@@ -596,7 +474,7 @@ class PersistentProxies:
         particles: NDArray[np.int64],
         targets: NDArray[np.float64],
         depth: NDArray[np.float64],
-        sides: _Sides,
+        sides: Sides,
     ) -> NDArray[np.intp]:
         """Lift onto the top face each particle (stack) whose point lies deeper than
         the margin inside an object's footprint while the particle is below the top
@@ -607,7 +485,7 @@ class PersistentProxies:
             targets: the contour points, metres, world frame, (K, 2).
             depth: each point's depth in the footprint that holds it deepest, metres,
                 negative outside, (K,).
-            sides: the rows inside a footprint (:meth:`_pressing`).
+            sides: the rows inside a footprint (:func:`~graspenv.proxies.side_hold.pressing`).
 
         Returns:
             The rows lifted.

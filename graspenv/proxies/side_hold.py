@@ -18,18 +18,37 @@ stiffness. Each frame the particles pressing a side are compared with where the
 hand put them; the part of their shortfalls along the sides that one rigid motion
 of each object explains is integrated into a per-contact offset of the targets
 (README, "The side hold"; docs/design.md, section 3b).
+
+The pure laws (:func:`side_hold`, :func:`rigid_part`, :func:`shared_side_load`)
+come first; then the frame's side stages the persistent proxies call, which read
+the world: which particles press a side (:func:`pressing`, :func:`beside`), each
+contact's hold after a frame (:func:`holds_after`) and the targets with their load
+shared (:func:`shared_targets`).
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.geometry import less_along
+from graspenv.physics.control import REST_TOLERANCE
+from graspenv.physics.world import PhysicsWorld
 
-__all__ = ["WRAPPED_NORMAL", "rigid_part", "shared_side_load", "side_hold"]
+__all__ = [
+    "WRAPPED_NORMAL",
+    "Sides",
+    "beside",
+    "holds_after",
+    "pressing",
+    "rigid_part",
+    "shared_side_load",
+    "shared_targets",
+    "side_hold",
+]
 
 #: The side hold counts a contact only where its particles' side normals add up to
 #: at least this share of their number (an arc of up to about 150° either side of
@@ -220,3 +239,136 @@ def shared_side_load(
     share = np.where(shared[group], deep * load[group] / depth[group] - along, 0.0)
     shift[press] = share[:, None] * tangent[press]
     return shift
+
+
+class Sides(NamedTuple):
+    """The rows of a frame whose points lie inside an object's footprint.
+
+    Attributes:
+        rows: their indices, (N,).
+        at: where their bottom particles are, metres, world frame, (N, 3).
+        normal: the table-plane outward normal of the nearest object's side at each
+            particle within two particle radii, or a zero row, (N, 2).
+        nearest, off: the object nearest each particle and how deep the particle's
+            centre lies in its footprint, metres, negative outside, (N,) each.
+    """
+
+    rows: NDArray[np.intp]
+    at: NDArray[np.float64]
+    normal: NDArray[np.float64]
+    nearest: NDArray[np.int64]
+    off: NDArray[np.float64]
+
+
+def pressing(
+    world: PhysicsWorld,
+    particles: NDArray[np.int64],
+    owner: NDArray[np.int64],
+    depth: NDArray[np.float64],
+) -> Sides:
+    """The rows whose points lie inside an object's footprint, where their bottom
+    particles are and the side each is by (what the penetration limit and the
+    side hold both need, read once).
+
+    Args:
+        particles: particle ids, (K, L) stacks, bottom first.
+        owner, depth: the object whose footprint holds each point deepest and that
+            depth from its nearest side, metres, negative outside; (K,) each
+            (:meth:`~graspenv.physics.world.PhysicsWorld.footprint_depth`).
+    """
+    rows = np.flatnonzero((owner >= 0) & (depth > 0.0))
+    at = world.pool.positions(particles[rows, 0])
+    # The nearest footprint's side within two radii of the particle (none at a
+    # disc's centre or by a leaning cylinder).
+    nearest, off, normal = world.footprint_side(at[:, :2], 2.0 * world.pool.radius)
+    return Sides(rows, at, normal, nearest, off)
+
+
+def holds_after(
+    world: PhysicsWorld,
+    hold: NDArray[np.float64],
+    gain: float,
+    most: float,
+    track_of: NDArray[np.intp],
+    particles: NDArray[np.int64],
+    born: NDArray[np.bool_],
+    owner: NDArray[np.int64],
+    sides: Sides,
+    lifted: NDArray[np.intp],
+) -> NDArray[np.float64]:
+    """Each contact's side hold after this frame (step 7 of :mod:`graspenv.proxies.persistent`).
+
+    A particle counts if its point lies inside an object's footprint, it was
+    not put down this frame, it stands on the table (not on a top face) and
+    that object is the one nearest it, whose side gives its outward normal
+    (:func:`side_hold` leaves out those with none).
+    Its shortfall is where the hand put it last frame (its last target less its
+    contact's hold then) less where it is; a particle a merged contact
+    inherited was held with its old contact's hold, which for that one frame
+    counts as shortfall (and, through the fit, in the other contacts on the
+    same object).
+
+    Args:
+        world: the world the particles are in.
+        hold: each contact's hold before this frame, metres, world frame, (T, 2).
+        gain, most: as :func:`side_hold`.
+        track_of: each row's contact, (K,).
+        particles, born: the rows' particle stacks (K, L) and which were put
+            down this frame.
+        owner: the object whose footprint holds each point deepest, (K,).
+        sides: the rows inside a footprint (:func:`pressing`).
+        lifted: the rows the penetration limit put on a top face this frame.
+
+    Returns:
+        The new holds, metres, world frame, (T, 2).
+    """
+    pool = world.pool
+    rows, at, outward, _, off = sides
+    keep = ~born[rows] & beside(world, sides, owner, lifted)
+    rows, at, outward, off = rows[keep], at[keep, :2], outward[keep], off[keep]
+    contact = track_of[rows]
+    shortfall = pool.last_targets(particles[rows, 0]) - hold[contact] - at
+    body = owner[rows]
+    arm = at - world.object_states().position[body, :2]
+    # The arm to the particle's point on the side, not to its centre: particles
+    # on one face press in to depths a few micrometres apart, and seen from
+    # their centres the face would tell a turn from a shift along it.
+    arm += off[:, None] * outward
+    return side_hold(hold, gain, contact, shortfall, outward, body, arm, most)
+
+
+def beside(
+    world: PhysicsWorld, sides: Sides, owner: NDArray[np.int64], lifted: NDArray[np.intp]
+) -> NDArray[np.bool_]:
+    """Which of ``sides``' rows press the side of the object their point lies in:
+    the particle stands on the table (not on a top face, nor lifted there this
+    frame) and that object is the one nearest it (with two objects close
+    together it may not be)."""
+    on_table = sides.at[:, 2] < world.pool.radius + REST_TOLERANCE
+    return on_table & ~np.isin(sides.rows, lifted) & (sides.nearest == owner[sides.rows])
+
+
+def shared_targets(
+    world: PhysicsWorld,
+    particle_friction: float,
+    targets: NDArray[np.float64],
+    track_of: NDArray[np.intp],
+    owner: NDArray[np.int64],
+    sides: Sides,
+    lifted: NDArray[np.intp],
+) -> NDArray[np.float64]:
+    """``targets`` with each contact's load along each object's side shared by its
+    particles' depths (step 8 of :mod:`graspenv.proxies.persistent`), where they press a side
+    (:func:`beside`)."""
+    keep = beside(world, sides, owner, lifted) & np.any(sides.normal != 0.0, axis=1)
+    rows, body = sides.rows[keep], owner[sides.rows[keep]]
+    objects = world.scene.objects
+    friction = particle_friction * np.array([o.friction for o in objects])
+    targets = targets.copy()
+    targets[rows] += shared_side_load(
+        targets[rows] - sides.at[keep, :2],
+        sides.normal[keep],
+        track_of[rows] * len(objects) + body,
+        friction[body],
+    )
+    return targets

@@ -87,7 +87,7 @@ from graspenv.jit import njit
 from graspenv.physics.control import REST_TOLERANCE
 from graspenv.physics.world import PhysicsWorld
 from graspenv.proxies.base import ProxyCommand, rotation_kernel
-from graspenv.proxies.side_hold import Sides, holds_after, pressing, shared_targets
+from graspenv.proxies.side_hold import Sides, beside, holds_after, pressing, shared_targets
 
 __all__ = ["PersistentProxies"]
 
@@ -270,16 +270,18 @@ class PersistentProxies:
         track_of = np.repeat(np.arange(len(tracks.ids)), sizes)
         if self._cull:
             track_of = track_of[embodied]
+        if self._hold_gain > 0.0 or self._share:
+            pressed = beside(self._world, sides, owner, lifted)
         if self._hold_gain > 0.0:
             # In place, as the culling: the tracks keep the new hold.
             tracks.hold[:] = holds_after(
                 self._world, tracks.hold, self._hold_gain, self._hold_most,
-                track_of, particles, born, owner, sides, lifted,
+                track_of, particles, born, owner, sides, pressed,
             )  # fmt: skip
             targets = targets + tracks.hold[track_of]
         if self._share:
             targets = shared_targets(
-                self._world, proxy.particle_friction, targets, track_of, owner, sides, lifted
+                self._world, proxy.particle_friction, targets, track_of, owner, sides, pressed
             )
         return ProxyCommand(particles, targets, spin, culled=culled, born=born)
 

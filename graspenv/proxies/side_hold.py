@@ -10,9 +10,7 @@ same e, the least pressed reach their limit (e = μ·d) first and slide while th
 rest hold, and the grip creeps in partial slip (README, "A fingertip shares its side
 load"). :func:`shared_side_load` shares each fingertip's load by depth instead.
 
-The side hold:
-
-A fingertip is rigid: under a steady load along an object's side its particles
+The side hold: a fingertip is rigid: under a steady load along an object's side its particles
 should stay where the hand puts them, not give by the load over the contact law's
 stiffness. Each frame the particles pressing a side are compared with where the
 hand put them; the part of their shortfalls along the sides that one rigid motion
@@ -220,13 +218,13 @@ def shared_side_load(
     # mean) than its own friction holds is not stuck with the rest: it slides back
     # towards its point as before (else particles could drift along a held side,
     # ever further from their points, and bunch).
-    _, first = np.unique(group[press], return_inverse=True)
-    mean = np.bincount(first, along[press]) / np.bincount(first)
-    press = press[np.abs(along[press] - mean[first]) <= friction[press] * deep[press]]
+    _, group = np.unique(group[press], return_inverse=True)
+    mean = np.bincount(group, along[press]) / np.bincount(group)
+    stuck = np.abs(along[press] - mean[group]) <= friction[press] * deep[press]
+    press, group = press[stuck], group[stuck]
     if press.size == 0:
         return shift
     along, deep, friction = along[press], deep[press], friction[press]
-    _, group = np.unique(group[press], return_inverse=True)
     count = np.bincount(group)
     normal = np.zeros((count.size, 2))
     np.add.at(normal, group, outward[press])
@@ -294,7 +292,7 @@ def holds_after(
     born: NDArray[np.bool_],
     owner: NDArray[np.int64],
     sides: Sides,
-    lifted: NDArray[np.intp],
+    pressed: NDArray[np.bool_],
 ) -> NDArray[np.float64]:
     """Each contact's side hold after this frame (step 7 of :mod:`graspenv.proxies.persistent`).
 
@@ -317,14 +315,14 @@ def holds_after(
             down this frame.
         owner: the object whose footprint holds each point deepest, (K,).
         sides: the rows inside a footprint (:func:`pressing`).
-        lifted: the rows the penetration limit put on a top face this frame.
+        pressed: which of them press a side (:func:`beside`).
 
     Returns:
         The new holds, metres, world frame, (T, 2).
     """
     pool = world.pool
     rows, at, outward, _, off = sides
-    keep = ~born[rows] & beside(world, sides, owner, lifted)
+    keep = ~born[rows] & pressed
     rows, at, outward, off = rows[keep], at[keep, :2], outward[keep], off[keep]
     contact = track_of[rows]
     shortfall = pool.last_targets(particles[rows, 0]) - hold[contact] - at
@@ -355,12 +353,12 @@ def shared_targets(
     track_of: NDArray[np.intp],
     owner: NDArray[np.int64],
     sides: Sides,
-    lifted: NDArray[np.intp],
+    pressed: NDArray[np.bool_],
 ) -> NDArray[np.float64]:
     """``targets`` with each contact's load along each object's side shared by its
     particles' depths (step 8 of :mod:`graspenv.proxies.persistent`), where they press a side
-    (:func:`beside`)."""
-    keep = beside(world, sides, owner, lifted) & np.any(sides.normal != 0.0, axis=1)
+    (``pressed``, :func:`beside`)."""
+    keep = pressed & np.any(sides.normal != 0.0, axis=1)
     rows, body = sides.rows[keep], owner[sides.rows[keep]]
     objects = world.scene.objects
     friction = particle_friction * np.array([o.friction for o in objects])

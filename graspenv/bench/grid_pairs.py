@@ -48,6 +48,7 @@ FIGURES: tuple[tuple[str, str, float, str, Callable[[CellResult], bool]], ...] =
     ("slide", "slide_error_pct", SLIDE_TARGET_PCT, "%", lambda r: r.slide_counted),
     ("slip", "slip_error_pct", SLIP_TARGET_PCT, "%", lambda r: True),
     ("slip at the force then", "slip_error_then_pct", SLIP_TARGET_PCT, "%", lambda r: True),
+    ("slip, Bullet's normal tilt out", "slip_untilted_pct", SLIP_TARGET_PCT, "%", lambda r: True),
     ("slip at its onset", "slip_onset_error_pct", SLIP_TARGET_PCT, "%", lambda r: True),
     ("slip at its onset, force then", "slip_onset_then_pct", SLIP_TARGET_PCT, "%", lambda r: True),
 )

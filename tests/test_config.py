@@ -4,7 +4,14 @@ from pathlib import Path
 
 import pytest
 
-from graspenv.config import ConfigError, PhysicsConfig, SceneConfig, load_config, to_dict
+from graspenv.config import (
+    ConfigError,
+    ObjectConfig,
+    PhysicsConfig,
+    SceneConfig,
+    load_config,
+    to_dict,
+)
 
 CONFIGS = Path(__file__).resolve().parents[1] / "envs_configs"
 
@@ -152,7 +159,8 @@ def test_contour_spacing_follows_the_particle_radius() -> None:
 def test_particles_weigh_a_share_of_the_lightest_object() -> None:
     def scene(*masses: float, **proxy: object) -> SceneConfig:
         objects = [
-            {"name": f"box{i}", "shape": "box", "size": [0.05, 0.05, 0.03], "mass": m}
+            # Flat: a tall object's particles weigh less again (the next test).
+            {"name": f"box{i}", "shape": "box", "size": [0.05, 0.05, 0.01], "mass": m}
             for i, m in enumerate(masses)
         ]
         return load_config(None, objects=objects, proxy=proxy)
@@ -180,6 +188,34 @@ def test_particles_weigh_a_share_of_the_lightest_object() -> None:
         load_config(None, proxy={"mass_ratio": -0.1})
     with pytest.raises(ConfigError, match="mass_ratio"):
         load_config(None, proxy={"mass_ratio": float("inf")})
+
+
+def test_a_tall_objects_particles_weigh_less() -> None:
+    """``proxy.effective_mass_ratio``: a particle weighs at most 0.15 of the mass a
+    level push at its centre feels, m / (1 + m h² / I), so the particles by an object
+    tall for its width weigh less than ``mass_ratio`` gives; flat ones are as they
+    were, and so is the canonical box (20 g against the 138 g it feels)."""
+    can = ObjectConfig("can", "cylinder", (0.0155, 0.0438), mass=0.015)
+    below = 0.0438 / 2 - 0.002
+    inertia = 0.015 * (3 * 0.0155**2 + 0.0438**2) / 12
+    felt = 1 / (1 / 0.015 + below**2 / inertia)
+    assert can.level_push_mass(0.002) == pytest.approx(felt)
+    assert felt == pytest.approx(0.0053, abs=1e-4)
+    tall = load_config(
+        None,
+        objects=[{"name": "can", "shape": "cylinder", "size": [0.0155, 0.0438], "mass": 0.015}],
+    )
+    assert tall.particle_scale == pytest.approx(0.15 * felt / 0.02)
+    off = tall.replace(proxy={"effective_mass_ratio": 0.0})
+    assert off.particle_scale == pytest.approx(0.1 * 0.015 / 0.02)
+    box = load_config(None).objects[0]
+    assert 0.1 * box.mass < 0.15 * box.level_push_mass(0.002) < 0.11 * box.mass
+    flat = ObjectConfig("flat", "box", (0.06, 0.06, 0.008), mass=0.2)
+    assert flat.level_push_mass(0.002) == pytest.approx(0.2, rel=0.05)
+    ball = ObjectConfig("ball", "sphere", (0.02,), mass=0.05)
+    assert ball.level_push_mass(0.002) == 0.05
+    with pytest.raises(ConfigError, match="effective_mass_ratio"):
+        load_config(None, proxy={"effective_mass_ratio": -1.0})
 
 
 @pytest.mark.parametrize("key", ["close_px", "fill_px"])

@@ -288,16 +288,20 @@ class ProxyConfig:
             3b). The press on an object's top is not scaled (it is the finger's, and
             rubs a light object along). :attr:`SceneConfig.particle_settings`
             resolves it.
-        effective_mass_ratio: the most a particle may weigh as a share of an
-            object's mass as a level push at a particle's centre feels it
-            (:meth:`ObjectConfig.level_push_mass`), lowering ``mass_ratio``'s
-            particles where an object is tall for its width (0 turns it off).
-            Bullet's solver meets a push below an object's centre of mass as a
-            lighter object, one that also turns: 1.5 g particles squeezing a 15 g
-            cylinder 3.1 cm wide and 4.4 cm tall (which a level push there feels as
-            5.4 g) tipped it out of the grip at half of Coulomb's force (README, "A
-            tall object's particles"). 0.15 is a little above the canonical 6 × 6 ×
-            3 cm box's own share (20 g against 138 g), so its scenes and those of
+        effective_mass_ratio: the most a particle may weigh, at the law's own
+            step (``physics.control_time``), as a share of an object's mass as a
+            level push at a particle's centre feels it
+            (:meth:`ObjectConfig.level_push_mass`); where it weighs more, the
+            scene's frames take more, shorter sub-steps, the step shrinking by the
+            excess (:attr:`SceneConfig.sub_steps`; 0 turns it off). A push below
+            an object's centre of mass meets a lighter object, one that also turns:
+            1.5 g particles (a tenth of its mass) squeezing a 15 g cylinder 3.1 cm
+            wide and 4.4 cm tall, which a push there feels as 5.3 g, tipped it out
+            of the grip at half of Coulomb's force at four sub-steps and held it at
+            eight (README, "A tall object's sub-steps"). Lighter particles held it
+            too, but gripped it more softly; the shorter step keeps the grip's
+            stiffness. 0.15 is a little above the canonical 6 × 6 × 3 cm box's own
+            share (20 g against the 138 g it feels), so its scenes and those of
             flatter objects are as they were.
         particle_friction: lateral friction of a particle. Bullet multiplies it by the
             object's: the default 2.0 gives a finger–object coefficient of 1.0 on a 0.5
@@ -620,18 +624,13 @@ class SceneConfig:
         """The factor ``proxy.mass_ratio`` puts on the particles' mass, table press and
         force clamp in this scene: 1 when the lightest object weighs
         ``particle_mass / mass_ratio`` (200 g at the defaults), below 1 for lighter
-        scenes and above it for heavier ones, and lower where an object is tall for
-        its width (``proxy.effective_mass_ratio``). It has no upper bound: the scaling
+        scenes and above it for heavier ones. It has no upper bound: the scaling
         argument holds at any mass, but the long fuzz (``graspenv bench --fuzz``)
         checks it only up to 5 kg (particles of 500 g and a 500 N clamp)."""
         proxy = self.proxy
         if proxy.mass_ratio == 0 or not self.objects:
             return 1.0
-        mass = proxy.mass_ratio * min(o.mass for o in self.objects)
-        if proxy.effective_mass_ratio > 0:
-            felt = min(o.level_push_mass(proxy.particle_radius) for o in self.objects)
-            mass = min(mass, proxy.effective_mass_ratio * felt)
-        scale = mass / proxy.particle_mass
+        scale = proxy.mass_ratio * min(o.mass for o in self.objects) / proxy.particle_mass
         # Rounding (0.1 · 0.2 kg is not 0.02 kg in binary) must not perturb a scene
         # whose particles already weigh the ratio's share.
         return 1.0 if math.isclose(scale, 1.0, rel_tol=1e-9) else scale
@@ -653,6 +652,30 @@ class SceneConfig:
             self.physics, max_particle_force=self.physics.max_particle_force * scale
         )
         return proxy, physics
+
+    @property
+    def sub_steps(self) -> int:
+        """The sub-steps a frame takes at least: ``physics.substeps``, or more where a
+        particle outweighs ``proxy.effective_mass_ratio`` of the mass an object feels
+        at a particle's centre (:meth:`ObjectConfig.level_push_mass`), so that the
+        step is ``physics.control_time`` times that share over the particle's, up to
+        ``physics.max_substeps``."""
+        proxy, physics = self.proxy, self.physics
+        if proxy.effective_mass_ratio == 0 or not self.objects:
+            return physics.substeps
+        particle = proxy.particle_mass * self.particle_scale
+        felt = min(o.level_push_mass(proxy.particle_radius) for o in self.objects)
+        share = proxy.effective_mass_ratio * felt / particle
+        if share >= 1.0:
+            return physics.substeps
+        # Each sub-step a particle hands the object the momentum it gains over the
+        # step towards its point, reach·m/Δt·(h/Δt): what that moves an object
+        # feeling M is the canonical scene's share of it when h shrinks by the
+        # particle's excess over that share.
+        step = physics.control_time * share
+        # A hair under a whole number of steps is that number (rounding).
+        needed = math.ceil(1.0 / (self.surface.fps * step) - 1e-9)
+        return max(physics.substeps, min(needed, physics.max_substeps))
 
     def replace(self, **sections: Any) -> SceneConfig:
         """A copy with whole sections or section fields replaced (dicts are merged)."""

@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+import math
+from dataclasses import asdict
 from pathlib import Path
 
 import pytest
@@ -9,6 +11,7 @@ from graspenv.config import (
     ObjectConfig,
     PhysicsConfig,
     SceneConfig,
+    at_fidelity,
     load_config,
     to_dict,
 )
@@ -159,8 +162,7 @@ def test_contour_spacing_follows_the_particle_radius() -> None:
 def test_particles_weigh_a_share_of_the_lightest_object() -> None:
     def scene(*masses: float, **proxy: object) -> SceneConfig:
         objects = [
-            # Flat: a tall object's particles weigh less again (the next test).
-            {"name": f"box{i}", "shape": "box", "size": [0.05, 0.05, 0.01], "mass": m}
+            {"name": f"box{i}", "shape": "box", "size": [0.05, 0.05, 0.03], "mass": m}
             for i, m in enumerate(masses)
         ]
         return load_config(None, objects=objects, proxy=proxy)
@@ -190,26 +192,29 @@ def test_particles_weigh_a_share_of_the_lightest_object() -> None:
         load_config(None, proxy={"mass_ratio": float("inf")})
 
 
-def test_a_tall_objects_particles_weigh_less() -> None:
-    """``proxy.effective_mass_ratio``: a particle weighs at most 0.15 of the mass a
-    level push at its centre feels, m / (1 + m h² / I), so the particles by an object
-    tall for its width weigh less than ``mass_ratio`` gives; flat ones are as they
-    were, and so is the canonical box (20 g against the 138 g it feels)."""
+def test_a_tall_object_gets_shorter_sub_steps() -> None:
+    """``proxy.effective_mass_ratio``: where a particle outweighs 0.15 of the mass a
+    level push at its centre feels, m / (1 + m h² / I), a frame's sub-steps shrink
+    by the excess; the particles weigh what ``mass_ratio`` gives. The canonical box
+    (20 g particles against the 138 g it feels) and flatter objects keep four."""
     can = ObjectConfig("can", "cylinder", (0.0155, 0.0438), mass=0.015)
     below = 0.0438 / 2 - 0.002
     inertia = 0.015 * (3 * 0.0155**2 + 0.0438**2) / 12
     felt = 1 / (1 / 0.015 + below**2 / inertia)
     assert can.level_push_mass(0.002) == pytest.approx(felt)
     assert felt == pytest.approx(0.0053, abs=1e-4)
-    tall = load_config(
-        None,
-        objects=[{"name": "can", "shape": "cylinder", "size": [0.0155, 0.0438], "mass": 0.015}],
-    )
-    assert tall.particle_scale == pytest.approx(0.15 * felt / 0.02)
-    off = tall.replace(proxy={"effective_mass_ratio": 0.0})
-    assert off.particle_scale == pytest.approx(0.1 * 0.015 / 0.02)
-    box = load_config(None).objects[0]
+    tall = load_config(None, objects=[asdict(can)])
+    assert tall.particle_scale == pytest.approx(0.1 * 0.015 / 0.02)
+    # 1.5 g particles against 0.15 · 5.3 g: a step of 0.53 of the law's Δt (1/240 s).
+    share = 0.15 * felt / 0.0015
+    assert tall.sub_steps == math.ceil(4 / share) == 8
+    assert tall.replace(proxy={"effective_mass_ratio": 0.0}).sub_steps == 4
+    assert tall.replace(physics={"max_substeps": 6}).sub_steps == 6
+    assert at_fidelity(tall, "reference").sub_steps == 8
+    default = load_config(None)
+    box = default.objects[0]
     assert 0.1 * box.mass < 0.15 * box.level_push_mass(0.002) < 0.11 * box.mass
+    assert default.sub_steps == 4
     flat = ObjectConfig("flat", "box", (0.06, 0.06, 0.008), mass=0.2)
     assert flat.level_push_mass(0.002) == pytest.approx(0.2, rel=0.05)
     ball = ObjectConfig("ball", "sphere", (0.02,), mass=0.05)

@@ -20,7 +20,9 @@ the one public class, the objects' states (read, and set by teleporting), where 
 particles are put down (:meth:`PhysicsWorld.put_down`) and the per-frame particle
 drive (:meth:`PhysicsWorld.step_frame`).
 
-The time step is ``1 / (surface.fps · physics.substeps)``, sub-stepped in Python:
+The time step is ``1 / (surface.fps · physics.substeps)`` (more sub-steps in a scene
+whose particles outweigh what a tall object feels: ``SceneConfig.sub_steps``),
+sub-stepped in Python:
 the particle force is recomputed before every ``stepSimulation``. Bullet's own
 ``numSubSteps`` would reapply the first sub-step's force on every internal step.
 A frame in which an object's point or a particle would move more than
@@ -37,6 +39,7 @@ world's bit for bit). Disturbances (:meth:`apply_force`) and initial motions
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import itertools
 import math
 from typing import TypedDict
@@ -123,7 +126,12 @@ class PhysicsWorld(Closeable):
         """
         self.scene = scene
         self.frame_dt = 1.0 / scene.surface.fps
-        self.substeps = scene.physics.substeps
+        # More sub-steps where particles outweigh what a tall object feels
+        # (SceneConfig.sub_steps); the stepper raises them further for fast motion.
+        physics = scene.physics
+        if scene.sub_steps != physics.substeps:
+            physics = dataclasses.replace(physics, substeps=scene.sub_steps)
+        self.substeps = physics.substeps
         self.substep_dt = self.frame_dt / self.substeps
         # Below the sub-step the control law would be unstable.
         self.control_dt = max(scene.physics.control_time, self.substep_dt)
@@ -135,7 +143,7 @@ class PhysicsWorld(Closeable):
         self.pool = ParticlePool(self.client, self._particle_proxy, self._particle_physics)
         self.rigid_proxies = RigidBodies(self.client, self._particle_proxy, self._particle_physics)
         self._stepper = FrameStepper(
-            self.client, self._bodies, self.pool, scene.physics, self.substeps, self.substep_dt
+            self.client, self._bodies, self.pool, physics, self.substeps, self.substep_dt
         )
         self._states: ObjectStates | None = None
         self._states_step = -1

@@ -592,8 +592,9 @@ def test_bullet_finds_a_cylinders_side_normal_only_to_a_few_degrees(
     tolerance that is a length: the same shapes ten times the size are off a tenth
     as much). A normal a degree off turns 1.7 % of the particle's normal force
     along the side, 1.7 %/μ of its friction there. Measured here: 1.8° on average,
-    4.3° at most; ten times the size, particles and all, 0.14° and 0.33°. If a newer PyBullet makes it exact, this fails and the README's
-    account of the cylinders' remaining slip error should be measured again."""
+    4.3° at most; ten times the size, particles and all, 0.14° and 0.33°. If a
+    newer PyBullet makes it exact, this fails and the README's account of the
+    cylinders' remaining slip error should be measured again."""
     objects = [
         {"name": "box", "shape": "box", "size": [0.06, 0.06, 0.03]},
         {"name": "can", "shape": "cylinder", "size": [0.0225, 0.03], "position": [0.15, 0.0]},

@@ -20,9 +20,7 @@ the one public class, the objects' states (read, and set by teleporting), where 
 particles are put down (:meth:`PhysicsWorld.put_down`) and the per-frame particle
 drive (:meth:`PhysicsWorld.step_frame`).
 
-The time step is ``1 / (surface.fps · physics.substeps)`` (more sub-steps in a scene
-whose particles outweigh what a tall object feels: ``SceneConfig.sub_steps``),
-sub-stepped in Python:
+The time step is ``1 / (surface.fps · SceneConfig.sub_steps)``, sub-stepped in Python:
 the particle force is recomputed before every ``stepSimulation``. Bullet's own
 ``numSubSteps`` would reapply the first sub-step's force on every internal step.
 A frame in which an object's point or a particle would move more than
@@ -126,11 +124,8 @@ class PhysicsWorld(Closeable):
         """
         self.scene = scene
         self.frame_dt = 1.0 / scene.surface.fps
-        # More sub-steps where particles outweigh what a tall object feels
-        # (SceneConfig.sub_steps); the stepper raises them further for fast motion.
-        physics = scene.physics
-        if scene.sub_steps != physics.substeps:
-            physics = dataclasses.replace(physics, substeps=scene.sub_steps)
+        # More where particles outweigh what a tall object feels (SceneConfig.sub_steps).
+        physics = dataclasses.replace(scene.physics, substeps=scene.sub_steps)
         self.substeps = physics.substeps
         self.substep_dt = self.frame_dt / self.substeps
         # Below the sub-step the control law would be unstable.

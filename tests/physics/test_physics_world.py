@@ -577,7 +577,8 @@ def _side_normal_errors(
         pb.resetBasePositionAndOrientation(body, centre, [0, 0, 0, 1], physicsClientId=world.client)
         (contact,) = pb.getClosestPoints(body, target, 0.001, physicsClientId=world.client)
         normal = np.asarray(contact[7][:2])  # on the object, towards the particle
-        errors.append(math.degrees(math.atan2(np.cross(outward, normal), outward @ normal)))
+        across = outward[0] * normal[1] - outward[1] * normal[0]
+        errors.append(math.degrees(math.atan2(across, outward @ normal)))
     world.pool.release(particle)
     return np.abs(errors)
 

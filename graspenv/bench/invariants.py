@@ -213,14 +213,14 @@ def speed_bound(scene: SceneConfig, finger_speed: float) -> float:
 
     Args:
         scene: gives the control law's Δt (``physics.control_time``, or the
-            sub-step if longer).
+            sub-step if longer; the scene's own, ``SceneConfig.sub_steps``).
         finger_speed: the fastest finger point of the case, m/s.
 
     Returns:
         ``finger_speed + REBOUND_DEPTH / Δt``, m/s; add ``sqrt(2 g Δz)`` for an
         object that has dropped by Δz.
     """
-    substep = 1.0 / (scene.surface.fps * scene.physics.substeps)
+    substep = 1.0 / (scene.surface.fps * scene.sub_steps)
     control_dt = max(scene.physics.control_time, substep)
     return finger_speed + REBOUND_DEPTH / control_dt
 

@@ -252,14 +252,20 @@ class ObjectConfig:
         push along a normal passes through its centre."""
         if self.shape == "sphere":
             return self.mass
+        below = max(0.0, self.height / 2.0 - height)
+        return 1.0 / (1.0 / self.mass + below**2 / self.level_inertia)
+
+    @property
+    def level_inertia(self) -> float:
+        """The least moment of inertia about a level axis through the centre of mass,
+        kg·m² (uniform density)."""
         if self.shape == "box":
             width, depth, tall = self.size
-            inertia = self.mass * (min(width, depth) ** 2 + tall**2) / 12.0
-        else:
+            return self.mass * (min(width, depth) ** 2 + tall**2) / 12
+        if self.shape == "cylinder":
             radius, tall = self.size
-            inertia = self.mass * (3.0 * radius**2 + tall**2) / 12.0
-        below = max(0.0, tall / 2.0 - height)
-        return 1.0 / (1.0 / self.mass + below**2 / inertia)
+            return self.mass * (3 * radius**2 + tall**2) / 12
+        return 0.4 * self.mass * self.size[0] ** 2
 
 
 @dataclass(frozen=True)

@@ -326,8 +326,7 @@ def _create_object(
     if config.shape == "cylinder":
         # A compound's inertia would be its bounding box's. (PyBullet sets a rigid
         # body's inertia with the mass it is given, so both go.)
-        radius, height = config.size
-        across = config.mass * (3 * radius**2 + height**2) / 12
+        across, radius = config.level_inertia, config.size[0]
         pb.changeDynamics(
             body,
             -1,

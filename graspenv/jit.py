@@ -4,8 +4,9 @@ Per-frame work on contours, particles, masks and contacts runs in a few compiled
 functions per frame (``docs/design.md``, section 3, "The lean frame"); Python keeps the
 orchestration and every PyBullet call. Each compiled function sits in the module of
 the stage that owns it; the plain-numpy forms they replaced are kept as test oracles
-in ``tests/contacts/reference.py``. Compiled functions do not check their indices:
-the public functions that call them check their arguments first.
+in ``tests/contacts/reference.py`` and ``tests/proxies/reference.py``. Compiled
+functions do not check their indices: the public functions that call them check
+their arguments first.
 
 Settings, and why:
 

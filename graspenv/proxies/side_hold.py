@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from graspenv.geometry import less_along
+from graspenv.jit import njit
 from graspenv.physics.control import REST_TOLERANCE
 from graspenv.physics.world import PhysicsWorld
 
@@ -202,40 +203,91 @@ def shared_side_load(
     Args:
         reach: each particle's target less where it is, metres, world frame, (N, 2).
         outward: its side's unit outward normal, (N, 2), no zero row.
-        group: each particle's group, any integers, (N,).
+        group: each particle's group, integers in a small range, (N,).
         friction: its friction coefficient against the side (Bullet's product of
             the two), (N,).
 
     Returns:
         The shift of each target along its side, metres, world frame, (N, 2).
     """
-    tangent = np.column_stack([-outward[:, 1], outward[:, 0]])
-    along = np.einsum("ij,ij->i", reach, tangent)
-    deep = -np.einsum("ij,ij->i", reach, outward)
-    shift = np.zeros_like(reach)
-    press = np.flatnonzero(deep > 0.0)
-    # A particle further from its place in the contact (its offset less its group's
-    # mean) than its own friction holds is not stuck with the rest: it slides back
-    # towards its point as before (else particles could drift along a held side,
-    # ever further from their points, and bunch).
-    _, group = np.unique(group[press], return_inverse=True)
-    mean = np.bincount(group, along[press]) / np.bincount(group)
-    stuck = np.abs(along[press] - mean[group]) <= friction[press] * deep[press]
-    press, group = press[stuck], group[stuck]
-    if press.size == 0:
-        return shift
-    along, deep, friction = along[press], deep[press], friction[press]
-    count = np.bincount(group)
-    normal = np.zeros((count.size, 2))
-    np.add.at(normal, group, outward[press])
-    load = np.bincount(group, along)
-    depth = np.bincount(group, deep)
-    limit = np.bincount(group, friction * deep)
-    shared = (np.hypot(normal[:, 0], normal[:, 1]) >= WRAPPED_NORMAL * count) & (
-        np.abs(load) < limit
+    if not (reach.shape == outward.shape and reach.shape[1:] == (2,)):
+        raise ValueError(f"reach and outward must be (N, 2), got {reach.shape}, {outward.shape}")
+    if not (group.shape == friction.shape == reach.shape[:1]):
+        raise ValueError(f"group and friction must be ({len(reach)},)")
+    return _share_by_depth(
+        np.ascontiguousarray(reach, np.float64),
+        np.ascontiguousarray(outward, np.float64),
+        np.ascontiguousarray(group, np.int64),
+        np.ascontiguousarray(friction, np.float64),
+        WRAPPED_NORMAL,
     )
-    share = np.where(shared[group], deep * load[group] / depth[group] - along, 0.0)
-    shift[press] = share[:, None] * tangent[press]
+
+
+@njit
+def _share_by_depth(
+    reach: NDArray[np.float64],
+    outward: NDArray[np.float64],
+    group: NDArray[np.int64],
+    friction: NDArray[np.float64],
+    wrapped: float,
+) -> NDArray[np.float64]:
+    """:func:`shared_side_load`, compiled: two passes over the particles in order,
+    summing per group as numpy's ``bincount`` does (the numpy form it replaced is
+    the oracle in tests/proxies/reference.py). Groups are indexed from the smallest
+    number among the pressing particles, so their range should be small (contact
+    index × objects + object, in the frame's use)."""
+    n = reach.shape[0]
+    shift = np.zeros((n, 2))
+    along = np.empty(n)
+    deep = np.empty(n)
+    pressing, first, last = 0, 0, 0
+    for i in range(n):
+        along[i] = reach[i, 0] * -outward[i, 1] + reach[i, 1] * outward[i, 0]
+        deep[i] = -(reach[i, 0] * outward[i, 0] + reach[i, 1] * outward[i, 1])
+        if deep[i] > 0.0:
+            if pressing == 0 or group[i] < first:
+                first = group[i]
+            if pressing == 0 or group[i] > last:
+                last = group[i]
+            pressing += 1
+    if pressing == 0:
+        return shift
+    size = last - first + 1
+    # The pressing particles' mean offset along the side, per group: one further
+    # from it than its own friction holds is not stuck with the rest and slides
+    # back towards its point as before (else particles could drift along a held
+    # side, ever further from their points, and bunch).
+    total = np.zeros(size)
+    count = np.zeros(size, np.int64)
+    for i in range(n):
+        if deep[i] > 0.0:
+            total[group[i] - first] += along[i]
+            count[group[i] - first] += 1
+    stuck = np.zeros(n, np.bool_)
+    normal = np.zeros((size, 2))
+    load = np.zeros(size)
+    depth = np.zeros(size)
+    limit = np.zeros(size)
+    held = np.zeros(size, np.int64)
+    for i in range(n):
+        if deep[i] > 0.0:
+            g = group[i] - first
+            if abs(along[i] - total[g] / count[g]) <= friction[i] * deep[i]:
+                stuck[i] = True
+                held[g] += 1
+                normal[g, 0] += outward[i, 0]
+                normal[g, 1] += outward[i, 1]
+                load[g] += along[i]
+                depth[g] += deep[i]
+                limit[g] += friction[i] * deep[i]
+    for i in range(n):
+        if stuck[i]:
+            g = group[i] - first
+            wraps = np.hypot(normal[g, 0], normal[g, 1]) < wrapped * held[g]
+            if not wraps and abs(load[g]) < limit[g]:
+                share = deep[i] * load[g] / depth[g] - along[i]
+                shift[i, 0] = share * -outward[i, 1]
+                shift[i, 1] = share * outward[i, 0]
     return shift
 
 
@@ -343,7 +395,9 @@ def beside(
     frame) and that object is the one nearest it (with two objects close
     together it may not be)."""
     on_table = sides.at[:, 2] < world.pool.radius + REST_TOLERANCE
-    return on_table & ~np.isin(sides.rows, lifted) & (sides.nearest == owner[sides.rows])
+    if lifted.size:  # mostly empty, and numpy's isin costs microseconds even so
+        on_table &= ~np.isin(sides.rows, lifted)
+    return on_table & (sides.nearest == owner[sides.rows])
 
 
 def shared_targets(
@@ -358,15 +412,42 @@ def shared_targets(
     """``targets`` with each contact's load along each object's side shared by its
     particles' depths (step 8 of :mod:`graspenv.proxies.persistent`), where they press a side
     (``pressed``, :func:`beside`)."""
-    keep = pressed & np.any(sides.normal != 0.0, axis=1)
-    rows, body = sides.rows[keep], owner[sides.rows[keep]]
     objects = world.scene.objects
     friction = particle_friction * np.array([o.friction for o in objects])
-    targets = targets.copy()
-    targets[rows] += shared_side_load(
-        targets[rows] - sides.at[keep, :2],
-        sides.normal[keep],
-        track_of[rows] * len(objects) + body,
-        friction[body],
+    return _shared_rows(
+        targets, sides.rows, sides.at, sides.normal, pressed, track_of, owner, friction
     )
-    return targets
+
+
+@njit
+def _shared_rows(
+    targets: NDArray[np.float64],
+    rows: NDArray[np.intp],
+    at: NDArray[np.float64],
+    normal: NDArray[np.float64],
+    pressed: NDArray[np.bool_],
+    track_of: NDArray[np.intp],
+    owner: NDArray[np.int64],
+    friction: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """:func:`shared_targets` in one compiled call: the pressing rows with a side
+    normal gathered, their load shared (:func:`_share_by_depth`), the shifts added
+    to a copy of ``targets``; ``friction`` is each object's against a particle."""
+    kept = np.flatnonzero(pressed & ((normal[:, 0] != 0.0) | (normal[:, 1] != 0.0)))
+    m = kept.size
+    reach = np.empty((m, 2))
+    group = np.empty(m, np.int64)
+    against = np.empty(m)
+    for j in range(m):
+        row = rows[kept[j]]
+        body = owner[row]
+        reach[j, 0] = targets[row, 0] - at[kept[j], 0]
+        reach[j, 1] = targets[row, 1] - at[kept[j], 1]
+        group[j] = track_of[row] * friction.size + body
+        against[j] = friction[body]
+    shift = _share_by_depth(reach, normal[kept], group, against, WRAPPED_NORMAL)
+    shared = targets.copy()
+    for j in range(m):
+        shared[rows[kept[j]], 0] += shift[j, 0]
+        shared[rows[kept[j]], 1] += shift[j, 1]
+    return shared

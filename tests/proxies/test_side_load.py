@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from graspenv.proxies.side_hold import shared_side_load
+from graspenv.proxies.side_hold import WRAPPED_NORMAL, _shared_rows, shared_side_load
+
+from . import reference
 
 MU = 1.0
 
@@ -84,3 +86,50 @@ def test_a_particle_further_from_its_place_than_its_friction_holds_is_not_shared
     outward = np.tile([1.0, 0.0], (3, 1))
     reach = _reach(outward, [0.002, 0.002, 0.0005], [0.0002, 0.0, 0.0016])
     np.testing.assert_allclose(_after(reach, outward), [0.0001, 0.0001, 0.0016], rtol=1e-9)
+
+
+def test_the_compiled_sharing_matches_its_numpy_form() -> None:
+    """On random contacts (one to four groups a frame, some beyond their friction
+    limit, some wrapped round an object, some particles not pressing), bit for bit."""
+    rng = np.random.default_rng(0)
+    shared = 0
+    for _ in range(400):
+        n = int(rng.integers(0, 40))
+        angle = rng.uniform(-np.pi, np.pi, n) * rng.choice([0.1, 1.0])
+        outward = np.column_stack([np.cos(angle), np.sin(angle)])
+        depth = rng.uniform(-0.001, 0.004, n)
+        reach = _reach(outward, list(depth), list(rng.normal(0.0, 0.002, n)))
+        group = rng.integers(0, 4, n) * 3 + rng.integers(0, 2, n)
+        friction = rng.choice([0.3, 1.0, 2.0], n)
+        shift = shared_side_load(reach, outward, group, friction)
+        np.testing.assert_array_equal(
+            shift, reference.shared_side_load(reach, outward, group, friction, WRAPPED_NORMAL)
+        )
+        shared += int(np.count_nonzero(shift[:, 0]))
+    assert shared > 1000  # the cases share, not only leave alone
+
+
+def test_the_frames_compiled_gather_matches_its_numpy_form() -> None:
+    """The frame's step (``shared_targets``): rows of contacts on two objects, some
+    not pressing or with no side normal, gathered, shared and put back, bit for bit."""
+    rng = np.random.default_rng(1)
+    moved = 0
+    for _ in range(200):
+        k = int(rng.integers(0, 50))
+        targets = rng.normal(0.0, 0.05, (k, 2))
+        track_of = np.sort(rng.integers(0, 5, k)).astype(np.intp)
+        owner = rng.integers(-1, 2, k).astype(np.int64)
+        rows = np.flatnonzero(owner >= 0)
+        angle = rng.uniform(-np.pi, np.pi, rows.size)
+        normal = np.column_stack([np.cos(angle), np.sin(angle)])
+        normal[rng.random(rows.size) < 0.1] = 0.0
+        at = np.column_stack(
+            [targets[rows] + rng.normal(0.0, 0.002, (rows.size, 2)), np.full(rows.size, 0.004)]
+        )
+        pressed = rng.random(rows.size) < 0.9
+        friction = np.array([1.0, 0.6])
+        frame = (targets, rows, at, normal, pressed, track_of, owner, friction)
+        shared = _shared_rows(*frame)
+        np.testing.assert_array_equal(shared, reference.shared_rows(frame, WRAPPED_NORMAL))
+        moved += int(np.count_nonzero(np.any(shared != targets, axis=1)))
+    assert moved > 100  # the cases share, not only leave alone

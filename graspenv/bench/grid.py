@@ -288,6 +288,13 @@ class CellResult:
     #: (:func:`~graspenv.bench.scenarios.normal_tilt_push`): the engine's part of
     #: ``slip_error_pct``, not the model's. Not a target.
     slip_normal_tilt_pct: float = math.nan
+    #: The slide's error in two parts, per cent of the travel, signed: along it
+    #: (positive past where the hand stopped: the object's overshoot as the hand
+    #: stops, what the grip's give lets through) and across it, along the grip's
+    #: axis (where the pinch left it between the fingertips' rendered outlines).
+    #: ``slide_error_pct`` is their length. Not targets.
+    slide_along_pct: float = math.nan
+    slide_across_pct: float = math.nan
 
     @property
     def slip_untilted_pct(self) -> float:
@@ -405,6 +412,8 @@ def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = ""
     x, y = final[:2]
     ideal = (cell.position[0], cell.position[1] + SLIDE)
     result.slide_error_pct = 100.0 * math.hypot(x - ideal[0], y - ideal[1]) / SLIDE
+    result.slide_along_pct = 100.0 * (y - ideal[1]) / SLIDE
+    result.slide_across_pct = 100.0 * (x - ideal[0]) / SLIDE
     result.slide_margin = mu_f * slide_normal / (mu_t * weight)
     result.grip_normal_n = 0.5 * (turn_normal + slide_normal)
     result.max_tilt_deg = max(turn_tilt, slide_tilt)

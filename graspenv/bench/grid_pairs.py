@@ -7,8 +7,9 @@ Run the grid at each setting with the same seeds, then pair the cells::
     python -m graspenv.bench.grid_pairs A/*/grid.csv -- B/*/grid.csv
 
 For each map and each figure (the turn and the slide in the cells both settings
-count, the slip against Coulomb's force at the settled normal force and at the force
-just before the slip, and the same at the slip's onset), it gives each setting's mean
+count, the slide's parts along the travel and across it, the slip against Coulomb's
+force at the settled normal force and at the force just before the slip, and the
+same at the slip's onset), it gives each setting's mean
 |error| over the cells both measured, the mean of the paired differences (second
 minus first) with its standard error, and how many cells each puts within the
 target. Pairing cancels what a cell's two runs share (the grasp and its place on
@@ -46,6 +47,8 @@ __all__ = ["FIGURES", "main", "paired", "table"]
 FIGURES: tuple[tuple[str, str, float, str, Callable[[CellResult], bool]], ...] = (
     ("turn", "turn_error_deg", TURN_TARGET_DEG, "°", lambda r: r.turn_counted),
     ("slide", "slide_error_pct", SLIDE_TARGET_PCT, "%", lambda r: r.slide_counted),
+    ("slide along the travel", "slide_along_pct", SLIDE_TARGET_PCT, "%", lambda r: r.slide_counted),
+    ("slide across it", "slide_across_pct", SLIDE_TARGET_PCT, "%", lambda r: r.slide_counted),
     ("slip", "slip_error_pct", SLIP_TARGET_PCT, "%", lambda r: True),
     ("slip at the force then", "slip_error_then_pct", SLIP_TARGET_PCT, "%", lambda r: True),
     ("slip, Bullet's normal tilt out", "slip_untilted_pct", SLIP_TARGET_PCT, "%", lambda r: True),

@@ -37,6 +37,10 @@ def test_the_canonical_cell_off_its_pixels_meets_the_targets(
     assert canonical.turn_counted and canonical.slide_counted
     assert abs(canonical.turn_error_deg) <= grid.TURN_TARGET_DEG, canonical
     assert abs(canonical.slide_error_pct) <= grid.SLIDE_TARGET_PCT, canonical
+    # The slide's two parts are its error's, both measured.
+    parts = math.hypot(canonical.slide_along_pct, canonical.slide_across_pct)
+    assert parts == pytest.approx(canonical.slide_error_pct, rel=1e-12), canonical
+    assert canonical.slide_along_pct != 0.0 and canonical.slide_across_pct != 0.0, canonical
     assert math.isfinite(canonical.slip_error_pct)
     # Against a box's faces Bullet's normals are exact: none of the slip is theirs.
     assert abs(canonical.slip_normal_tilt_pct) < 0.05, canonical

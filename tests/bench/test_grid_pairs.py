@@ -14,7 +14,13 @@ from graspenv.bench.grid_pairs import main, paired
 
 def _results(turns: list[float], slips: list[float]) -> list[grid.CellResult]:
     cells = grid.placed([grid.BASE_CELL] * len(turns), seed=1)
-    held = {"slide_error_pct": 0.1, "turn_margin": 5.0, "slide_margin": 5.0}
+    held = {
+        "slide_error_pct": 0.1,
+        "slide_along_pct": 0.08,
+        "slide_across_pct": -0.06,
+        "turn_margin": 5.0,
+        "slide_margin": 5.0,
+    }
     return [
         grid.CellResult(
             cell, "boxes", turn_error_deg=t, slip_error_pct=s, slip_error_then_pct=s, **held
@@ -42,6 +48,9 @@ def test_the_cells_are_paired_and_the_differences_reported(
     assert "| boxes | turn (°) | 0.400 | 0.500 | +0.100 ± 0.252 | 3/3 | 2/3 | 0 |" in out
     assert "| boxes | slip (%) | 3.000 | 2.333 | -0.667 ± 0.667 | 2/3 | 3/3 | 0 |" in out
     assert "| all | slide (%) | 0.100 | 0.100 | +0.000 ± 0.000 | 3/3 | 3/3 | 0 |" in out
+    # The slide's parts, as sizes: the part across the travel is negative here.
+    assert "| all | slide along the travel (%) | 0.080 | 0.080 | +0.000 ± 0.000 |" in out
+    assert "| all | slide across it (%) | 0.060 | 0.060 | +0.000 ± 0.000 |" in out
     assert "3 cells in pairs, from 1 and 2 files." in out
 
 

@@ -22,7 +22,8 @@ grasp:
   the fingers' 90°, degrees.
 - ``slide``: squeeze and slide the pair 10 cm across the grip. Error: the distance
   between where the object ends and where the rigid grasp takes it (lateral drift
-  included), as a share of the travel, %.
+  included), as a share of the travel, %; and its two parts, along the travel and
+  across it.
 - ``slip``: squeeze and hold, then push across the grip along the contacts' line
   (so it cannot tip the object over them), the push growing by :data:`SLIP_RAMP` of
   Coulomb's prediction a second, until it slips: slides from under every gripping

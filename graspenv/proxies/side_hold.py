@@ -209,6 +209,9 @@ def shared_side_load(
 
     Returns:
         The shift of each target along its side, metres, world frame, (N, 2).
+
+    Raises:
+        ValueError: the arrays' shapes do not agree.
     """
     if not (reach.shape == outward.shape and reach.shape[1:] == (2,)):
         raise ValueError(f"reach and outward must be (N, 2), got {reach.shape}, {outward.shape}")

@@ -5,6 +5,7 @@ limit together."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from graspenv.proxies.side_hold import WRAPPED_NORMAL, _shared_rows, shared_side_load
 
@@ -133,3 +134,11 @@ def test_the_frames_compiled_gather_matches_its_numpy_form() -> None:
         np.testing.assert_array_equal(shared, reference.shared_rows(frame, WRAPPED_NORMAL))
         moved += int(np.count_nonzero(np.any(shared != targets, axis=1)))
     assert moved > 100  # the cases share, not only leave alone
+
+
+def test_arrays_that_do_not_agree_are_refused() -> None:
+    outward = np.tile([1.0, 0.0], (3, 1))
+    with pytest.raises(ValueError, match="reach and outward"):
+        shared_side_load(outward[:2], outward, np.zeros(3, np.int64), np.ones(3))
+    with pytest.raises(ValueError, match="group and friction"):
+        shared_side_load(outward, outward, np.zeros(2, np.int64), np.ones(3))

@@ -222,7 +222,6 @@ def shared_side_load(
         np.ascontiguousarray(outward, np.float64),
         np.ascontiguousarray(group, np.int64),
         np.ascontiguousarray(friction, np.float64),
-        WRAPPED_NORMAL,
     )
 
 
@@ -232,13 +231,13 @@ def _share_by_depth(
     outward: NDArray[np.float64],
     group: NDArray[np.int64],
     friction: NDArray[np.float64],
-    wrapped: float,
 ) -> NDArray[np.float64]:
-    """:func:`shared_side_load`, compiled: two passes over the particles in order,
+    """:func:`shared_side_load`, compiled: passes over the particles in order,
     summing per group as numpy's ``bincount`` does (the numpy form it replaced is
     the oracle in tests/proxies/reference.py). Groups are indexed from the smallest
     number among the pressing particles, so their range should be small (contact
-    index × objects + object, in the frame's use)."""
+    index × objects + object, in the frame's use). :data:`WRAPPED_NORMAL` is read
+    as a constant when it compiles."""
     n = reach.shape[0]
     shift = np.zeros((n, 2))
     along = np.empty(n)
@@ -286,7 +285,7 @@ def _share_by_depth(
     for i in range(n):
         if stuck[i]:
             g = group[i] - first
-            wraps = np.hypot(normal[g, 0], normal[g, 1]) < wrapped * held[g]
+            wraps = np.hypot(normal[g, 0], normal[g, 1]) < WRAPPED_NORMAL * held[g]
             if not wraps and abs(load[g]) < limit[g]:
                 share = deep[i] * load[g] / depth[g] - along[i]
                 shift[i, 0] = share * -outward[i, 1]
@@ -448,7 +447,7 @@ def _shared_rows(
         reach[j, 1] = targets[row, 1] - at[kept[j], 1]
         group[j] = track_of[row] * friction.size + body
         against[j] = friction[body]
-    shift = _share_by_depth(reach, normal[kept], group, against, WRAPPED_NORMAL)
+    shift = _share_by_depth(reach, normal[kept], group, against)
     shared = targets.copy()
     for j in range(m):
         shared[rows[kept[j]], 0] += shift[j, 0]

@@ -6,7 +6,7 @@ orchestration and every PyBullet call. Each compiled function sits in the module
 the stage that owns it; the plain-numpy forms they replaced are kept as test oracles
 in ``tests/contacts/reference.py`` and ``tests/proxies/reference.py``. Compiled
 functions do not check their indices: the public functions that call them check
-their arguments first.
+their arguments first, or take them from the frame's own steps before them.
 
 Settings, and why:
 

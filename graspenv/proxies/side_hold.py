@@ -203,7 +203,7 @@ def shared_side_load(
     Args:
         reach: each particle's target less where it is, metres, world frame, (N, 2).
         outward: its side's unit outward normal, (N, 2), no zero row.
-        group: each particle's group, integers in a small range, (N,).
+        group: each particle's group, any integers, (N,).
         friction: its friction coefficient against the side (Bullet's product of
             the two), (N,).
 
@@ -217,6 +217,8 @@ def shared_side_load(
         raise ValueError(f"reach and outward must be (N, 2), got {reach.shape}, {outward.shape}")
     if not (group.shape == friction.shape == reach.shape[:1]):
         raise ValueError(f"group and friction must be ({len(reach)},)")
+    if group.size and int(group.max()) - int(group.min()) > 4 * group.size:
+        group = np.unique(group, return_inverse=True)[1]  # the kernel indexes by range
     return _share_by_depth(
         np.ascontiguousarray(reach, np.float64),
         np.ascontiguousarray(outward, np.float64),
@@ -235,24 +237,24 @@ def _share_by_depth(
     """:func:`shared_side_load`, compiled: passes over the particles in order,
     summing per group as numpy's ``bincount`` does (the numpy form it replaced is
     the oracle in tests/proxies/reference.py). Groups are indexed from the smallest
-    number among the pressing particles, so their range should be small (contact
-    index × objects + object, in the frame's use). :data:`WRAPPED_NORMAL` is read
-    as a constant when it compiles."""
+    number among the pressing particles, so their range must be small (contact
+    index × objects + object in the frame's use; :func:`shared_side_load` renumbers a
+    wide one). :data:`WRAPPED_NORMAL` is read as a constant when it compiles."""
     n = reach.shape[0]
     shift = np.zeros((n, 2))
     along = np.empty(n)
     deep = np.empty(n)
-    pressing, first, last = 0, 0, 0
+    pressers, first, last = 0, 0, 0
     for i in range(n):
         along[i] = reach[i, 0] * -outward[i, 1] + reach[i, 1] * outward[i, 0]
         deep[i] = -(reach[i, 0] * outward[i, 0] + reach[i, 1] * outward[i, 1])
         if deep[i] > 0.0:
-            if pressing == 0 or group[i] < first:
+            if pressers == 0 or group[i] < first:
                 first = group[i]
-            if pressing == 0 or group[i] > last:
+            if pressers == 0 or group[i] > last:
                 last = group[i]
-            pressing += 1
-    if pressing == 0:
+            pressers += 1
+    if pressers == 0:
         return shift
     size = last - first + 1
     # The pressing particles' mean offset along the side, per group: one further
@@ -270,13 +272,13 @@ def _share_by_depth(
     load = np.zeros(size)
     depth = np.zeros(size)
     limit = np.zeros(size)
-    held = np.zeros(size, np.int64)
+    stuck_count = np.zeros(size, np.int64)
     for i in range(n):
         if deep[i] > 0.0:
             g = group[i] - first
             if abs(along[i] - total[g] / count[g]) <= friction[i] * deep[i]:
                 stuck[i] = True
-                held[g] += 1
+                stuck_count[g] += 1
                 normal[g, 0] += outward[i, 0]
                 normal[g, 1] += outward[i, 1]
                 load[g] += along[i]
@@ -285,11 +287,12 @@ def _share_by_depth(
     for i in range(n):
         if stuck[i]:
             g = group[i] - first
-            wraps = np.hypot(normal[g, 0], normal[g, 1]) < WRAPPED_NORMAL * held[g]
-            if not wraps and abs(load[g]) < limit[g]:
+            share = 0.0  # a stuck particle's shift is share × tangent, signed zeros too
+            one_side = np.hypot(normal[g, 0], normal[g, 1]) >= WRAPPED_NORMAL * stuck_count[g]
+            if one_side and abs(load[g]) < limit[g]:
                 share = deep[i] * load[g] / depth[g] - along[i]
-                shift[i, 0] = share * -outward[i, 1]
-                shift[i, 1] = share * outward[i, 0]
+            shift[i, 0] = share * -outward[i, 1]
+            shift[i, 1] = share * outward[i, 0]
     return shift
 
 
@@ -413,7 +416,8 @@ def shared_targets(
 ) -> NDArray[np.float64]:
     """``targets`` with each contact's load along each object's side shared by its
     particles' depths (step 8 of :mod:`graspenv.proxies.persistent`), where they press a side
-    (``pressed``, :func:`beside`)."""
+    (``pressed``, :func:`beside`). Its arguments come from the frame's steps before it
+    (:func:`pressing`, :func:`beside`) and are not checked again."""
     objects = world.scene.objects
     friction = particle_friction * np.array([o.friction for o in objects])
     return _shared_rows(

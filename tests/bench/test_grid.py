@@ -8,10 +8,14 @@ from __future__ import annotations
 
 import csv
 import math
+from collections import defaultdict
 from dataclasses import replace
 from pathlib import Path
+from types import SimpleNamespace
+from typing import Any
 
 import cv2
+import numpy as np
 import pytest
 
 from graspenv.bench import grid
@@ -49,6 +53,27 @@ def test_the_canonical_cell_off_its_pixels_meets_the_targets(
     step_pct = 100.0 * grid.SLIP_RAMP / base.surface.fps
     steps = (canonical.slip_error_pct - canonical.slip_onset_error_pct) / step_pct
     assert steps in [pytest.approx(n + 0.5) for n in range(4)], canonical
+
+
+def test_the_slides_parts_are_along_its_travel_and_across_it(
+    base: SceneConfig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The object ends 0.4 mm past where the hand stopped and 0.3 mm to the grip's
+    -x side (the runs faked): +0.4 % along the 10 cm, -0.3 % across, 0.5 % in all."""
+    (cell,) = grid.placed([grid.BASE_CELL], seed=3)
+    x, y = cell.position
+
+    def ended(base: SceneConfig, cell: grid.Cell, motion: str) -> tuple[Any, ...]:
+        final = np.array([x - 0.0003, y + grid.SLIDE + 0.0004, 0.015, 0.0])
+        return final, grid.TURN, 1.0, 0.0
+
+    monkeypatch.setattr(grid, "grasp_run", ended)
+    no_slip = SimpleNamespace(errors=defaultdict(lambda: math.nan))
+    monkeypatch.setattr(grid, "slip_run", lambda base, cell: no_slip)
+    result = grid.measure_cell(cell, base, "test")
+    assert result.slide_along_pct == pytest.approx(0.4)
+    assert result.slide_across_pct == pytest.approx(-0.3)
+    assert result.slide_error_pct == pytest.approx(0.5)
 
 
 def test_margins_follow_coulomb(base: SceneConfig, canonical: grid.CellResult) -> None:

@@ -89,6 +89,65 @@ def test_a_particle_further_from_its_place_than_its_friction_holds_is_not_shared
     np.testing.assert_allclose(_after(reach, outward), [0.0001, 0.0001, 0.0016], rtol=1e-9)
 
 
+def _same_bits(got: np.ndarray, expected: np.ndarray) -> None:
+    """Equal to the bit, signed zeros too (``assert_array_equal`` takes -0.0 for 0.0)."""
+    assert got.shape == expected.shape and got.dtype == expected.dtype
+    np.testing.assert_array_equal(got.view(np.uint64), expected.view(np.uint64))
+
+
+def _kernel_and_oracle(
+    outward: list[list[float]], depth: list[float], along: list[float], friction: float = MU
+) -> tuple[np.ndarray, np.ndarray]:
+    """One group's shifts from the compiled form and from the numpy form."""
+    normals = np.array(outward, dtype=float)
+    reach = _reach(normals, depth, along)
+    group, mu = np.zeros(len(depth), np.int64), np.full(len(depth), friction)
+    return (
+        shared_side_load(reach, normals, group, mu),
+        reference.shared_side_load(reach, normals, group, mu, WRAPPED_NORMAL),
+    )
+
+
+def test_ties_at_each_rule_go_as_the_numpy_form_says() -> None:
+    """Exactly representable cases on each rule's boundary, where random inputs never
+    land: a particle whose offset from the group's mean equals its friction limit is
+    stuck; a load equal to the group's limit slides; a particle at depth 0 does not
+    press; normals that add up to exactly the wrapped share are one side."""
+    face = [[1.0, 0.0]] * 2
+    cases = {
+        "offset at its limit, stuck": (face, [0.5, 0.5], [0.5, -0.5]),
+        "load at the limit, slides": (face, [0.5, 0.25], [0.25, 0.5]),
+        "depth 0, not pressing": (face, [0.5, 0.0], [0.125, 0.125]),
+        "normals at the wrapped share": (
+            [[1.0, 0.0]] * 3 + [[-1.0, 0.0], [0.0, 1.0], [0.0, 1.0], [0.0, -1.0], [0.0, -1.0]],
+            [0.5] * 8,
+            [0.25] + [0.0] * 7,
+        ),
+    }
+    moved = {}
+    for name, (outward, depth, along) in cases.items():
+        got, expected = _kernel_and_oracle(outward, depth, along)
+        _same_bits(got, expected)
+        moved[name] = bool(np.any(got != 0.0))
+    # Each tie decides whether anything moves, so flipping a rule's < and <= shows.
+    assert moved == {
+        "offset at its limit, stuck": True,
+        "load at the limit, slides": False,
+        "depth 0, not pressing": False,
+        "normals at the wrapped share": True,
+    }
+
+
+def test_groups_far_apart_are_groups_as_any() -> None:
+    """Group numbers need not be small: far apart they share as numbered 0 and 1."""
+    outward = np.tile([1.0, 0.0], (4, 1))
+    reach = _reach(outward, [0.001, 0.002, 0.001, 0.003], [0.0004, -0.0002, 0.0003, 0.0])
+    mu = np.full(4, MU)
+    near = shared_side_load(reach, outward, np.array([0, 0, 1, 1]), mu)
+    far = np.array([-(2**62), -(2**62), 2**62, 2**62])
+    _same_bits(shared_side_load(reach, outward, far, mu), near)
+
+
 def test_the_compiled_sharing_matches_its_numpy_form() -> None:
     """On random contacts (one to four groups a frame, some beyond their friction
     limit, some wrapped round an object, some particles not pressing), bit for bit."""
@@ -103,7 +162,7 @@ def test_the_compiled_sharing_matches_its_numpy_form() -> None:
         group = rng.integers(0, 4, n) * 3 + rng.integers(0, 2, n)
         friction = rng.choice([0.3, 1.0, 2.0], n)
         shift = shared_side_load(reach, outward, group, friction)
-        np.testing.assert_array_equal(
+        _same_bits(
             shift, reference.shared_side_load(reach, outward, group, friction, WRAPPED_NORMAL)
         )
         shared += int(np.count_nonzero(shift[:, 0]))
@@ -131,7 +190,7 @@ def test_the_frames_compiled_gather_matches_its_numpy_form() -> None:
         friction = np.array([1.0, 0.6])
         frame = (targets, rows, at, normal, pressed, track_of, owner, friction)
         shared = _shared_rows(*frame)
-        np.testing.assert_array_equal(shared, reference.shared_rows(frame, WRAPPED_NORMAL))
+        _same_bits(shared, reference.shared_rows(frame, WRAPPED_NORMAL))
         moved += int(np.count_nonzero(np.any(shared != targets, axis=1)))
     assert moved > 100  # the cases share, not only leave alone
 

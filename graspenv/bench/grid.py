@@ -412,9 +412,9 @@ def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = ""
     final, _, slide_normal, slide_tilt = grasp_run(base, cell, "slide")
     x, y = final[:2]
     ideal = (cell.position[0], cell.position[1] + SLIDE)
-    result.slide_error_pct = 100.0 * math.hypot(x - ideal[0], y - ideal[1]) / SLIDE
     result.slide_along_pct = 100.0 * (y - ideal[1]) / SLIDE
     result.slide_across_pct = 100.0 * (x - ideal[0]) / SLIDE
+    result.slide_error_pct = math.hypot(result.slide_along_pct, result.slide_across_pct)
     result.slide_margin = mu_f * slide_normal / (mu_t * weight)
     result.grip_normal_n = 0.5 * (turn_normal + slide_normal)
     result.max_tilt_deg = max(turn_tilt, slide_tilt)

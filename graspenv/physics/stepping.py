@@ -36,15 +36,16 @@ class FrameStepper:
         client: the PyBullet client.
         bodies: the scene's bodies (pushes act on ``bodies.objects`` by index).
         pool: the particle pool, whose ``physics_steps`` counts every Bullet step.
-        physics: the Bullet settings (sub-step counts and travel).
-        substeps: physics steps per frame at the configured rate.
-        substep_dt: seconds per physics step at ``substeps`` (Bullet's time step
-            after a frame of ``substeps``; after one of more, that frame's).
+        physics: the Bullet settings (sub-step counts and travel); its ``substeps``
+            are the scene's own (:attr:`~graspenv.config.SceneConfig.sub_steps`).
+        substep_dt: seconds per physics step at ``physics.substeps`` (Bullet's time
+            step after a frame of that many; after one of more, that frame's).
 
     Attributes:
         bullet_seconds: wall seconds spent inside Bullet's ``stepSimulation`` by the
             last frame.
-        last_substeps: physics steps the last frame took (``substeps`` or more).
+        last_substeps: physics steps the last frame took (``physics.substeps`` or
+            more).
     """
 
     def __init__(
@@ -53,14 +54,13 @@ class FrameStepper:
         bodies: SceneBodies,
         pool: ParticlePool,
         physics: PhysicsConfig,
-        substeps: int,
         substep_dt: float,
     ) -> None:
         self._client = client
         self._bodies = bodies
         self._pool = pool
         self._physics = physics
-        self._substeps = substeps
+        self._substeps = physics.substeps
         self._substep_dt = substep_dt
         # Bullet's time step now: the length of the last sub-step taken (run).
         self._bullet_dt = substep_dt
@@ -69,7 +69,7 @@ class FrameStepper:
         self._pending_force: dict[int, NDArray[np.float64]] = {}
         self._pending_torque: dict[int, NDArray[np.float64]] = {}
         self.bullet_seconds = 0.0
-        self.last_substeps = substeps
+        self.last_substeps = physics.substeps
 
     def push(self, index: int, force: NDArray[np.float64]) -> None:
         """Add a force at object ``index``'s centre of mass for the next frame, N."""

@@ -137,9 +137,7 @@ class PhysicsWorld(Closeable):
         self._particle_proxy, self._particle_physics = scene.particle_settings
         self.pool = ParticlePool(self.client, self._particle_proxy, self._particle_physics)
         self.rigid_proxies = RigidBodies(self.client, self._particle_proxy, self._particle_physics)
-        self._stepper = FrameStepper(
-            self.client, self._bodies, self.pool, physics, self.substeps, self.substep_dt
-        )
+        self._stepper = FrameStepper(self.client, self._bodies, self.pool, physics, self.substep_dt)
         self._states: ObjectStates | None = None
         self._states_step = -1
         self._place_objects()

@@ -193,6 +193,10 @@ class PersistentProxies:
         # slips, no more than this with an object's friction of up to 1.
         self._hold_most = proxy.particle_friction * proxy.penetration_margin
         self._share = proxy.share_side_load
+        # Each object's friction against a particle (Bullet's product), for the share.
+        self._side_friction = proxy.particle_friction * np.array(
+            [o.friction for o in world.scene.objects]
+        )
 
     def reset(self) -> None:
         self._tracks = _Tracks.empty(self._layers)
@@ -280,9 +284,7 @@ class PersistentProxies:
             )  # fmt: skip
             targets = targets + tracks.hold[track_of]
         if self._share:
-            targets = shared_targets(
-                self._world, proxy.particle_friction, targets, track_of, owner, sides, pressed
-            )
+            targets = shared_targets(self._side_friction, targets, track_of, owner, sides, pressed)
         return ProxyCommand(particles, targets, spin, culled=culled, born=born)
 
     # -- stages ------------------------------------------------------------------------

@@ -406,8 +406,7 @@ def beside(
 
 
 def shared_targets(
-    world: PhysicsWorld,
-    particle_friction: float,
+    friction: NDArray[np.float64],
     targets: NDArray[np.float64],
     track_of: NDArray[np.intp],
     owner: NDArray[np.int64],
@@ -416,10 +415,9 @@ def shared_targets(
 ) -> NDArray[np.float64]:
     """``targets`` with each contact's load along each object's side shared by its
     particles' depths (step 8 of :mod:`graspenv.proxies.persistent`), where they press a side
-    (``pressed``, :func:`beside`). Its arguments come from the frame's steps before it
-    (:func:`pressing`, :func:`beside`) and are not checked again."""
-    objects = world.scene.objects
-    friction = particle_friction * np.array([o.friction for o in objects])
+    (``pressed``, :func:`beside`); ``friction`` is each object's against a particle
+    (Bullet's product of the two). Its arguments come from the frame's steps before
+    it (:func:`pressing`, :func:`beside`) and are not checked again."""
     return _shared_rows(
         targets, sides.rows, sides.at, sides.normal, pressed, track_of, owner, friction
     )

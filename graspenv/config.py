@@ -550,6 +550,13 @@ class PhysicsConfig:
             side curved within a fingertip's width, used most of their friction
             before any push) and the noisy turn grew (README, "Speed against
             error").
+        critical_damping: an experiment, off in every preset: the law's damping
+            against the particle's velocity relative to its target's is (2 − h/Δt)·m/Δt
+            instead of m/Δt, which keeps a free particle's approach to its point
+            critically damped at any sub-step h ≤ Δt (at h = Δt the law is the same
+            to the bit; below it the law otherwise rings, a damping ratio of 0.5 in
+            the limit). It measures what the ring does to the grid (README, "The
+            slide's last tenth of a millimetre").
         pool_batch: particle bodies created at start and at each growth of the pool.
     """
 
@@ -569,6 +576,7 @@ class PhysicsConfig:
     contact_erp: float = 0.4
     control_time: float = 1.0 / 240.0
     stiff_tangent: bool = False
+    critical_damping: bool = False
     pool_batch: int = 64
 
     def __post_init__(self) -> None:

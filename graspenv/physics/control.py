@@ -10,11 +10,12 @@ target's velocity fed forward::
 
 in the table plane, with h the sub-step and Δt = ``physics.control_time`` (or h if
 longer; ``physics.stiff_tangent``, an experiment, gives the part along an object's
-side a shorter Δt of its own, :attr:`DriveLaw.tangent_tau`). At Δt = h this is the
-paper's law; for Δt > h the feed forward keeps a free particle on a moving target
-instead of lagging by u·Δt. A particle held off its point
-by a depth d (inside an object) pushes with about m·d/Δt² (1152 N/m at the defaults:
-squeezing deeper grips harder). A bottom particle sliding on the table stays short of
+side a shorter Δt of its own, :attr:`DriveLaw.tangent_tau`; ``physics.critical_damping``,
+another, adds (1 − h/Δt)·m/Δt of damping on ``v − u``, :attr:`DriveLaw.damping`). At
+Δt = h this is the paper's law; for Δt > h the feed forward keeps a free particle on
+a moving target instead of lagging by u·Δt. A particle held off its point by a depth d
+(inside an object) pushes with about m·d/Δt² (1152 N/m at the defaults: squeezing
+deeper grips harder). A bottom particle sliding on the table stays short of
 its point by its table friction over that stiffness (about 0.09 mm at the defaults).
 
 In z, a bottom particle resting on an object is pressed down by ``proxy.down_force``
@@ -169,6 +170,10 @@ class DriveLaw(NamedTuple):
             (``physics.stiff_tangent``).
         tangent_gain: h / ``tangent_tau``.
         rate: 1 / the frame's duration, 1/s.
+        damping: the share of a particle's velocity relative to its target's taken
+            off a sub-step beyond the law's own: (h/Δt)·(1 − h/Δt) with
+            ``physics.critical_damping``, else 0.
+        tangent_damping: the same along an object's side, at the tangent's Δt.
     """
 
     tau: float
@@ -180,6 +185,8 @@ class DriveLaw(NamedTuple):
     tangent_tau: float
     tangent_gain: float
     rate: float
+    damping: float
+    tangent_damping: float
 
 
 class ParticleDrive(NamedTuple):
@@ -258,6 +265,8 @@ class ParticleDrive(NamedTuple):
                 tangent_tau=tangent_tau,
                 tangent_gain=h / tangent_tau,
                 rate=1.0 / frame_dt,
+                damping=_extra_damping(h / tau, physics),
+                tangent_damping=_extra_damping(h / tangent_tau, physics),
             ),
             substeps=substeps,
             # Bullet adds g·h itself; the weight is cancelled and the press applied.
@@ -308,6 +317,15 @@ class ParticleDrive(NamedTuple):
         )
 
 
+def _extra_damping(gain: float, physics: PhysicsConfig) -> float:
+    """The share of the velocity relative to the target's that
+    ``physics.critical_damping`` takes off a sub-step at ``gain`` = h/Δt: the law's
+    damping then is (2 − h/Δt)·m/Δt, the one for which a free particle's two
+    eigenvalues a sub-step are equal (1 − h/Δt, both real), and at h = Δt the law's
+    own."""
+    return gain * (1.0 - gain) if physics.critical_damping else 0.0
+
+
 @njit
 def drive_velocities(
     position: NDArray[np.float64],
@@ -333,6 +351,8 @@ def drive_velocities(
     tangent_tau: float,
     tangent_gain: float,
     rate: float,
+    damping: float,
+    tangent_damping: float,
 ) -> NDArray[np.float64]:
     """One sub-step of the law (module docstring) for every particle: the velocity
     to set, m/s, (n, 3), from the particles' states now, the frame's targets, stacks
@@ -371,6 +391,18 @@ def drive_velocities(
             dn = dvx * nx + dvy * ny
             dvx = dn * nx + tangent_scale * (dvx - dn * nx)
             dvy = dn * ny + tangent_scale * (dvy - dn * ny)
+        if damping != 0.0:
+            # physics.critical_damping: a damper on the velocity relative to the
+            # target's, across the side at Δt and along it at the tangent's Δt.
+            rx = step[i, 0] * rate - velocity[i, 0]
+            ry = step[i, 1] * rate - velocity[i, 1]
+            if not on_side:
+                dvx += damping * rx
+                dvy += damping * ry
+            else:
+                rn = rx * nx + ry * ny
+                dvx += damping * rn * nx + tangent_damping * (rx - rn * nx)
+                dvy += damping * rn * ny + tangent_damping * (ry - rn * ny)
         size = np.hypot(dvx, dvy)
         if size > dv_max:
             dvx *= dv_max / size

@@ -8,6 +8,7 @@ from collections.abc import Callable
 import numpy as np
 import pybullet as pb
 import pytest
+from numpy.typing import NDArray
 
 from graspenv.physics import PhysicsWorld
 from graspenv.physics.control import ParticleDrive, SupportPlanes
@@ -311,3 +312,55 @@ def test_a_particle_put_down_beside_a_ball_or_a_box_rests_on_the_table(
     # flank below the ring ray is the support, as before.
     start = np.array([[*beside_ball, 2 * radius]])
     assert world._rays.support_heights(start)[0] > radius
+
+
+def _run_on(substeps: int, critical: bool, frames_moving: int = 20) -> NDArray[np.float64]:
+    """The law alone (no Bullet) on one free particle whose target moves at 6.7 cm/s
+    along x for ``frames_moving`` frames and then stops dead: the particle's signed
+    distance past the stopped target after each sub-step of the next 20 frames,
+    metres."""
+    from graspenv.config import load_config
+
+    scene = load_config(None).replace(physics={"substeps": substeps, "critical_damping": critical})
+    proxy, physics = scene.particle_settings
+    frame_dt = 1 / scene.surface.fps
+    speed = 0.067
+    r = proxy.particle_radius
+    rest = SupportPlanes(np.array([r]), np.zeros((1, 2)), np.zeros((1, 2)))
+    position = np.array([[0.0, 0.0, r]])
+    velocity = np.array([[speed, 0.0, 0.0]])
+    past = []
+    for frame in range(frames_moving + 20):
+        start = np.array([[speed * frame_dt * min(frame, frames_moving), 0.0]])
+        goal = np.array([[speed * frame_dt * min(frame + 1, frames_moving), 0.0]])
+        drive = ParticleDrive.for_frame(
+            start, goal, 1, frame_dt, substeps, proxy, physics, top_press=proxy.down_force
+        )
+        h = frame_dt / substeps
+        for s in range(1, substeps + 1):
+            velocity = drive.velocities(s, position, velocity, rest, drive.presses(rest.rest_z))
+            velocity[:, 2] = 0.0  # the table holds it; only the plane is in question
+            position = position + h * velocity
+            if frame >= frames_moving:
+                past.append(position[0, 0] - goal[0, 0])
+    return np.array(past)
+
+
+def test_critical_damping_is_the_law_itself_at_its_own_step() -> None:
+    """At h = Δt (the default's four sub-steps at 60 frames a second) the
+    experiment's extra damping is zero, and the velocities the same to the bit."""
+    assert np.array_equal(_run_on(4, critical=True), _run_on(4, critical=False))
+    assert np.abs(_run_on(4, critical=False)).max() < 1e-9  # lands in one sub-step
+
+
+@pytest.mark.parametrize("substeps", [8, 16])
+def test_critical_damping_takes_the_ring_out_of_a_finer_step(substeps: int) -> None:
+    """Below Δt the law's continuous form rings (damping ratio 0.5): a particle
+    whose point stops dead runs past it and swings back beyond it. With
+    ``physics.critical_damping`` it runs on less and never swings back."""
+    rings = _run_on(substeps, critical=False)
+    damped = _run_on(substeps, critical=True)
+    assert rings.max() > 5e-5 and rings.min() < -5e-6  # 87 µm past, 9 µm back at 8
+    assert 0.0 < damped.max() < 0.6 * rings.max()
+    assert damped.min() > -1e-9
+    assert abs(damped[-1]) < 1e-6 and abs(rings[-1]) < 1e-6  # both settle on it

@@ -268,7 +268,7 @@ def test_record_video_wraps_both_render_modes(mode: str, tmp_path: Any) -> None:
 
     env = RecordVideo(
         _make("graspenv/TurnInPlace-v0", render_mode=mode),
-        str(tmp_path),
+        str(tmp_path / "videos"),  # a folder of its own: RecordVideo warns on one that exists
         episode_trigger=lambda episode: True,
         disable_logger=True,
     )
@@ -278,7 +278,7 @@ def test_record_video_wraps_both_render_modes(mode: str, tmp_path: Any) -> None:
             env.step(env.action_space.sample())
     finally:
         env.close()
-    videos = list(tmp_path.glob("*.mp4"))
+    videos = list((tmp_path / "videos").glob("*.mp4"))
     assert len(videos) == 1 and videos[0].stat().st_size > 1000
 
 

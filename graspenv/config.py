@@ -552,8 +552,8 @@ class PhysicsConfig:
             error").
         critical_damping: an experiment, off in every preset: the law's damping
             against the particle's velocity relative to its target's is (2 − h/Δt)·m/Δt
-            instead of m/Δt, which keeps a free particle's approach to its point
-            critically damped at any sub-step h ≤ Δt (at h = Δt the law is the same
+            instead of m/Δt in the table plane, which keeps a free particle's approach
+            to its point critically damped at any sub-step h ≤ Δt (at h = Δt the law is the same
             to the bit; below it the law otherwise rings, a damping ratio of 0.5 in
             the limit). It measures what the ring does to the grid (README, "The
             slide's last tenth of a millimetre").

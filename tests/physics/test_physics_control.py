@@ -314,27 +314,47 @@ def test_a_particle_put_down_beside_a_ball_or_a_box_rests_on_the_table(
     assert world._rays.support_heights(start)[0] > radius
 
 
-def _run_on(substeps: int, critical: bool, frames_moving: int = 20) -> NDArray[np.float64]:
+def _run_on(
+    substeps: int,
+    critical: bool,
+    direction: tuple[float, float] = (1.0, 0.0),
+    normal: tuple[float, float] | None = None,
+    tangent_dt: float | None = None,
+    frames_moving: int = 20,
+) -> NDArray[np.float64]:
     """The law alone (no Bullet) on one free particle whose target moves at 6.7 cm/s
-    along x for ``frames_moving`` frames and then stops dead: the particle's signed
-    distance past the stopped target after each sub-step of the next 20 frames,
-    metres."""
+    along ``direction`` for ``frames_moving`` frames and then stops dead: the
+    particle's signed distance past the stopped target along ``direction`` after
+    each sub-step of the next 20 frames, metres. With ``normal`` the target lies
+    beside an object's side of that table-plane normal, the law's Δt along it
+    ``tangent_dt``."""
     from graspenv.config import load_config
 
     scene = load_config(None).replace(physics={"substeps": substeps, "critical_damping": critical})
     proxy, physics = scene.particle_settings
     frame_dt = 1 / scene.surface.fps
+    way = np.array(direction)
     speed = 0.067
     r = proxy.particle_radius
     rest = SupportPlanes(np.array([r]), np.zeros((1, 2)), np.zeros((1, 2)))
+    normals = None if normal is None else np.array([normal])
     position = np.array([[0.0, 0.0, r]])
-    velocity = np.array([[speed, 0.0, 0.0]])
+    velocity = np.array([[*(speed * way), 0.0]])
     past = []
     for frame in range(frames_moving + 20):
-        start = np.array([[speed * frame_dt * min(frame, frames_moving), 0.0]])
-        goal = np.array([[speed * frame_dt * min(frame + 1, frames_moving), 0.0]])
+        start = speed * frame_dt * min(frame, frames_moving) * way[None, :]
+        goal = speed * frame_dt * min(frame + 1, frames_moving) * way[None, :]
         drive = ParticleDrive.for_frame(
-            start, goal, 1, frame_dt, substeps, proxy, physics, top_press=proxy.down_force
+            start,
+            goal,
+            1,
+            frame_dt,
+            substeps,
+            proxy,
+            physics,
+            top_press=proxy.down_force,
+            normals=normals,
+            tangent_dt=tangent_dt,
         )
         h = frame_dt / substeps
         for s in range(1, substeps + 1):
@@ -342,8 +362,16 @@ def _run_on(substeps: int, critical: bool, frames_moving: int = 20) -> NDArray[n
             velocity[:, 2] = 0.0  # the table holds it; only the plane is in question
             position = position + h * velocity
             if frame >= frames_moving:
-                past.append(position[0, 0] - goal[0, 0])
+                past.append(float((position[0, :2] - goal[0]) @ way))
     return np.array(past)
+
+
+def _double_root_residual(past: NDArray[np.float64], root: float) -> float:
+    """How far a particle's path after its point stopped is from that of a linear
+    recurrence whose two roots are both ``root`` (a critically damped sub-step:
+    e[k+2] = 2·root·e[k+1] − root²·e[k]), relative to its largest excursion."""
+    rest = past[2:] - 2 * root * past[1:-1] + root**2 * past[:-2]
+    return float(np.abs(rest).max() / np.abs(past).max())
 
 
 def test_critical_damping_is_the_law_itself_at_its_own_step() -> None:
@@ -357,10 +385,32 @@ def test_critical_damping_is_the_law_itself_at_its_own_step() -> None:
 def test_critical_damping_takes_the_ring_out_of_a_finer_step(substeps: int) -> None:
     """Below Δt the law's continuous form rings (damping ratio 0.5): a particle
     whose point stops dead runs past it and swings back beyond it. With
-    ``physics.critical_damping`` it runs on less and never swings back."""
+    ``physics.critical_damping`` it runs on less, never swings back, and its two
+    roots a sub-step are both 1 − h/Δt."""
     rings = _run_on(substeps, critical=False)
     damped = _run_on(substeps, critical=True)
     assert rings.max() > 5e-5 and rings.min() < -5e-6  # 87 µm past, 9 µm back at 8
     assert 0.0 < damped.max() < 0.6 * rings.max()
     assert damped.min() > -1e-9
     assert abs(damped[-1]) < 1e-6 and abs(rings[-1]) < 1e-6  # both settle on it
+    root = 1.0 - 4.0 / substeps  # h/Δt = (1/60/S) / (1/240)
+    assert _double_root_residual(damped, root) < 1e-9
+    assert _double_root_residual(rings, root) > 1e-3
+
+
+@pytest.mark.parametrize(
+    ("direction", "root"),
+    [((1.0, 0.0), 0.75), ((0.0, 1.0), 0.5)],
+    ids=["across the side", "along it"],
+)
+def test_critical_damping_beside_a_side_uses_each_directions_own_step(
+    direction: tuple[float, float], root: float
+) -> None:
+    """Beside a side (normal +x) with the law's Δt along it half its Δt across
+    (``physics.stiff_tangent``'s form) at 16 sub-steps: h/Δt is 1/4 across and 1/2
+    along, and the particle's two roots a sub-step are 1 − h/Δt of its direction."""
+    damped = _run_on(16, True, direction, normal=(1.0, 0.0), tangent_dt=1 / 480)
+    rings = _run_on(16, False, direction, normal=(1.0, 0.0), tangent_dt=1 / 480)
+    assert damped.max() > 1e-6 and damped.min() > -1e-9
+    assert _double_root_residual(damped, root) < 1e-9
+    assert _double_root_residual(rings, root) > 1e-3

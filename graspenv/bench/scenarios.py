@@ -189,7 +189,10 @@ def push_until_slip(
     Returns:
         The run, with errors ``slip_force_n``, ``coulomb_force_n``,
         ``slip_error_pct``, ``creep_force_n``, ``grip_normal_n`` (settled),
-        ``tilt_at_slip_deg``, and ``slip_normal_n`` and ``slip_error_then_pct``:
+        ``tilt_at_slip_deg``, ``grip_normal_spread_pct`` (the settled normal
+        force's standard deviation over its mean, per cent, frame to frame: a
+        grip that jitters, as one of many sub-steps at a per-step contact ERP
+        does, spreads), and ``slip_normal_n`` and ``slip_error_then_pct``:
         the fingers' normal force over the five frames before the slip, and the
         slip against Coulomb's force from it; ``slip_onset_force_n``,
         ``slip_onset_error_pct`` and ``slip_onset_then_pct``: the same at the
@@ -295,6 +298,8 @@ def push_until_slip(
 
     errors = played.errors
     errors["grip_normal_n"] = float(np.mean(state["normal"]))
+    # How steady the settled grip is: its normal force's spread over those frames.
+    errors["grip_normal_spread_pct"] = _spread_pct(state["normal"])
     errors["tilt_at_slip_deg"] = state.get("tilt", math.nan)
     errors["slip_force_n"] = state["force"]
     errors["coulomb_force_n"] = coulomb
@@ -323,6 +328,13 @@ def push_until_slip(
         errors["slip_onset_force_n"] = onset
         errors["slip_onset_error_pct"], errors["slip_onset_then_pct"], _ = against(onset, frame)
     return played
+
+
+def _spread_pct(values: Sequence[float]) -> float:
+    """The standard deviation of ``values`` as a share of their mean, per cent (NaN
+    for none, or a mean of zero)."""
+    mean = float(np.mean(values)) if len(values) else 0.0
+    return 100.0 * float(np.std(values)) / mean if mean else math.nan
 
 
 def normal_tilt_push(world: PhysicsWorld, report: ContactReport, along: Sequence[float]) -> float:

@@ -300,7 +300,7 @@ class CellResult:
     #: standard deviation over its mean across the settled frames, per cent. Not a
     #: target (README, "The slide's last tenth of a millimetre": a grip of many
     #: sub-steps at Bullet's per-step contact ERP jitters).
-    grip_spread_pct: float = math.nan
+    grip_normal_spread_pct: float = math.nan
 
     @property
     def slip_untilted_pct(self) -> float:
@@ -430,7 +430,7 @@ def measure_cell(cell: Cell, base: SceneConfig | None = None, map_name: str = ""
     result.slip_onset_error_pct = slipped["slip_onset_error_pct"]
     result.slip_onset_then_pct = slipped["slip_onset_then_pct"]
     result.slip_normal_tilt_pct = slipped["slip_normal_tilt_pct"]
-    result.grip_spread_pct = slipped["grip_normal_spread_pct"]
+    result.grip_normal_spread_pct = slipped["grip_normal_spread_pct"]
     return result
 
 

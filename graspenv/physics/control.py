@@ -396,13 +396,10 @@ def drive_velocities(
             # target's, across the side at Δt and along it at the tangent's Δt.
             rx = step[i, 0] * rate - velocity[i, 0]
             ry = step[i, 1] * rate - velocity[i, 1]
-            if not on_side:
-                dvx += damping * rx
-                dvy += damping * ry
-            else:
-                rn = rx * nx + ry * ny
-                dvx += damping * rn * nx + tangent_damping * (rx - rn * nx)
-                dvy += damping * rn * ny + tangent_damping * (ry - rn * ny)
+            rn = rx * nx + ry * ny  # zero off a side, where all of it is at Δt
+            along = tangent_damping if on_side else damping
+            dvx += damping * rn * nx + along * (rx - rn * nx)
+            dvy += damping * rn * ny + along * (ry - rn * ny)
         size = np.hypot(dvx, dvy)
         if size > dv_max:
             dvx *= dv_max / size

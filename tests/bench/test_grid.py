@@ -47,7 +47,7 @@ def test_the_canonical_cell_off_its_pixels_meets_the_targets(
     assert canonical.slide_along_pct != 0.0 and canonical.slide_across_pct != 0.0, canonical
     assert math.isfinite(canonical.slip_error_pct)
     # The settled grip is steady at the default's four sub-steps, but not still.
-    assert 0.0 < canonical.grip_spread_pct < 3.0, canonical
+    assert 0.0 < canonical.grip_normal_spread_pct < 3.0, canonical
     # Against a box's faces Bullet's normals are exact: none of the slip is theirs.
     assert abs(canonical.slip_normal_tilt_pct) < 0.05, canonical
     # The onset is half a step of the push (a share of Coulomb's force a frame)

@@ -340,6 +340,8 @@ def _run_on(
     normals = None if normal is None else np.array([normal])
     position = np.array([[0.0, 0.0, r]])
     velocity = np.array([[*(speed * way), 0.0]])
+    h = frame_dt / substeps
+    press = np.array([0.0])  # the vertical velocity is zeroed below
     past = []
     for frame in range(frames_moving + 20):
         start = speed * frame_dt * min(frame, frames_moving) * way[None, :]
@@ -356,9 +358,8 @@ def _run_on(
             normals=normals,
             tangent_dt=tangent_dt,
         )
-        h = frame_dt / substeps
         for s in range(1, substeps + 1):
-            velocity = drive.velocities(s, position, velocity, rest, drive.presses(rest.rest_z))
+            velocity = drive.velocities(s, position, velocity, rest, press)
             velocity[:, 2] = 0.0  # the table holds it; only the plane is in question
             position = position + h * velocity
             if frame >= frames_moving:

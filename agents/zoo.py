@@ -95,7 +95,7 @@ class ScriptedDemonstrations(BaseCallback):
     The fit draws its batches from the labelled states with a generator of its own
     (seeded by the algorithm's seed), not from the replay buffer: until DAgger came
     it drew them with ``replay_buffer.sample``, from numpy's global stream, so runs
-    made before then (the README's CatchBall run with ``critic_warmup``) do not
+    made before then (docs/baselines.md's CatchBall run with ``critic_warmup``) do not
     repeat bit for bit.
     """
 

@@ -304,7 +304,7 @@ class ProxyConfig:
             1.5 g particles (a tenth of its mass) squeezing a 15 g cylinder 3.1 cm
             wide and 4.4 cm tall, which a push there feels as 5.3 g, tipped it out
             of the grip at half of Coulomb's force at four sub-steps and held it at
-            eight (README, "A tall object's sub-steps"). Lighter particles held it
+            eight (docs/accuracy.md, "A tall object's sub-steps"). Lighter particles held it
             too, but gripped it more softly; the shorter step keeps the grip's
             stiffness. 0.15 is a little above the canonical 6 × 6 × 3 cm box's own
             share (20 g against the 138 g it feels), so its scenes and those of
@@ -379,7 +379,7 @@ class ProxyConfig:
             ``reference`` the grid's cylinders slipped within 5 % of Coulomb in 79
             of 100 cells instead of 44, its turns erred 0.086° instead of 0.143° on
             average and the two-hand carry ended 0.85 mm off instead of 1.27, but
-            under dropout holes the turn errs more than without it (README, "The
+            under dropout holes the turn errs more than without it (docs/accuracy.md, "The
             side hold"). A hold time of a frame or less takes up the whole
             shortfall each frame; only the ``persistent`` method has it.
         share_side_load: a fingertip's particles pressing one object's side share
@@ -387,7 +387,7 @@ class ProxyConfig:
             (step 8 of :mod:`graspenv.proxies.persistent`): without it each stuck
             particle carries the same load, the least pressed slip first and the
             grip creeps before it slips, and round a curved side that creep costs
-            or gains normal force (README, "A fingertip shares its side load").
+            or gains normal force (docs/accuracy.md, "A fingertip shares its side load").
             Only the ``persistent`` method has it.
         instant_stride: pixel subsample of the instant method's gradient pixels.
         rigid_height: height of the rigid method's contact bodies, metres.
@@ -482,7 +482,7 @@ class PhysicsConfig:
             island stops earlier once converged). A firm grip's island converges
             slowly: at 50 a box squeezed 4.5 mm deep rocked out of a still grip and
             stacked particles slipped 7 % short of Coulomb; at 150 both are within
-            1.5 % (README, "Accuracy across the grasp space").
+            1.5 % (docs/accuracy.md, "The solver's iterations and the force clamp").
         gravity: metres per second squared, pointing down.
         table_friction: the table's lateral friction coefficient.
         max_particle_force: clamp on each particle's planar control force, newtons,
@@ -490,12 +490,12 @@ class PhysicsConfig:
             Under the old 5 N a 20 g particle pressed 3 mm in had 3.6 N left for
             friction and the grip slipped early; at 10 N a box of friction 1 (2 with
             the fingertip) still slipped 10-13 % short of Coulomb's force, at 20 N
-            within 2 % (README, "Accuracy across the grasp space").
+            within 2 % (docs/accuracy.md, "The solver's iterations and the force clamp").
         max_particle_speed: clamp on each particle's commanded speed, m/s.
         ccd: continuous collision detection for particles (swept sphere): the
             guard against hard strikes (tests/stability). Off in ``fast``; it cost
             half the default's frame while it swept the whole particle, about a
-            tenth since (README, "How fast").
+            tenth since (docs/speed.md, "How fast: the lean frame").
         ccd_sphere: the radius of the sphere CCD sweeps, as a share of the
             particle's radius (Bullet's ``ccdSweptSphereRadius``; its motion
             threshold is half that). Bullet wants a sphere embedded in the shape,
@@ -548,14 +548,14 @@ class PhysicsConfig:
             cylinders within 5 % of Coulomb instead of 14, but slipped the 3 cm
             cylinders 23–75 % short (their contacts, held where they touched a
             side curved within a fingertip's width, used most of their friction
-            before any push) and the noisy turn grew (README, "Speed against
-            error").
+            before any push) and the noisy turn grew (docs/speed.md, "Speed
+            against error").
         critical_damping: an experiment, off in every preset: the law's damping
             against the particle's velocity relative to its target's is (2 − h/Δt)·m/Δt
             instead of m/Δt in the table plane, which keeps a free particle's approach
             to its point critically damped at any sub-step h ≤ Δt (at h = Δt the law is the same
             to the bit; below it the law otherwise rings, a damping ratio of 0.5 in
-            the limit). It measures what the ring does to the grid (README, "The
+            the limit). It measures what the ring does to the grid (docs/accuracy.md, "The
             slide's last tenth of a millimetre").
         pool_batch: particle bodies created at start and at each growth of the pool.
     """

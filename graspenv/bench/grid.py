@@ -298,7 +298,7 @@ class CellResult:
     slide_across_pct: float = math.nan
     #: How steady the settled grip of the slip run is: the fingers' normal force's
     #: standard deviation over its mean across the settled frames, per cent. Not a
-    #: target (README, "The slide's last tenth of a millimetre": a grip of many
+    #: target (docs/accuracy.md, "The slide's last tenth of a millimetre": a grip of many
     #: sub-steps at Bullet's per-step contact ERP jitters).
     grip_normal_spread_pct: float = math.nan
 

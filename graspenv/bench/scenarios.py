@@ -76,10 +76,10 @@ SLIP_FRAMES = 900  # the ramp gives up at SLIP_RATE × 15 s = 90 N (the figure i
 #: contact holds. Before that it creeps: under a growing push the particles with the
 #: least normal force slide first while the others hold it, and it moves with their
 #: give. Past the limit the excess force accelerates it: on the 0.2 kg box at 6 N/s it
-#: reaches 10 mm/s within two frames, 1 % of the force later (README, "Speed against
+#: reaches 10 mm/s within two frames, 1 % of the force later (docs/speed.md, "Speed against
 #: error"). Measured against the grip's mean instead (until 2026-12-06), a cylinder
 #: held at last by the two most pressed particles of each fingertip's arc crept past
-#: this speed 4-10 % short of Coulomb's force (README, "Accuracy across the grasp
+#: this speed 4-10 % short of Coulomb's force (docs/accuracy.md, "Accuracy across the grasp
 #: space"). The grip's mean creeping 0.5 mm is reported too.
 SLIP_SPEED = 0.01
 #: The slip's onset: of the frames up to and including the gross slip, the first

@@ -28,7 +28,7 @@ _RAY_BATCH = 8192
 #: below its centre. A ray from 0.9 radius out of a particle pressed into an object's
 #: side can start inside the object (a convex hull), and Bullet reports a hit at its
 #: very start; counting that as a support raised the particle's resting height with
-#: it, so nothing pulled it down and the squeeze walked it up the side (README,
+#: it, so nothing pulled it down and the squeeze walked it up the side (docs/accuracy.md,
 #: "Accuracy across the grasp space": the slide's box tipped 9° and lost its grip).
 #: A particle on a top face's edge meets the face 0.44 radius below its centre or
 #: lower.
@@ -184,7 +184,7 @@ class RayCaster:
         For particles put down from above (:meth:`PhysicsWorld.put_down`). A ray
         down past a ball's equator meets its flank, but the ball overhangs the table
         there: a particle on the table under it touches nothing, and put on the
-        flank it slid down between ball and table and spun the ball (README,
+        flank it slid down between ball and table and spun the ball (docs/stability.md,
         "Stability on hard cases"). Rays up from the table to the hits measure the
         gap under them: where every ray of a disc that meets an object has at least
         a particle's diameter under it, the particle fits under and those hits are

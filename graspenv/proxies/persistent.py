@@ -49,7 +49,7 @@ real fingertip. One camera frame:
    the margin of that edge while its particles, stopped at the face it entered by,
    would fall ever farther behind.
 
-7. *Side hold* (``proxy.hold_time``, an option off in every preset; README, "The
+7. *Side hold* (``proxy.hold_time``, an option off in every preset; docs/accuracy.md, "The
    side hold"). All of a contact's targets are shifted by one offset along the side
    its particles press, the integral of how far they stood behind the hand along
    it, over the hold time: a fingertip is rigid, so under a steady load along the

@@ -7,7 +7,7 @@ when the load along the side reaches μ times the normal force. Under the contac
 law each particle presses with k·d for a depth d and pulls along the side with k·e
 for an offset e along it, one stiffness k: particles stuck to one side carry the
 same e, the least pressed reach their limit (e = μ·d) first and slide while the
-rest hold, and the grip creeps in partial slip (README, "A fingertip shares its side
+rest hold, and the grip creeps in partial slip (docs/accuracy.md, "A fingertip shares its side
 load"). :func:`shared_side_load` shares each fingertip's load by depth instead.
 
 The side hold: a fingertip is rigid: under a steady load along an object's side its particles
@@ -15,7 +15,7 @@ should stay where the hand puts them, not give by the load over the contact law'
 stiffness. Each frame the particles pressing a side are compared with where the
 hand put them; the part of their shortfalls along the sides that one rigid motion
 of each object explains is integrated into a per-contact offset of the targets
-(README, "The side hold"; docs/design.md, section 3b).
+(docs/accuracy.md, "The side hold"; docs/design.md, section 3b).
 
 The pure laws (:func:`side_hold`, :func:`rigid_part`, :func:`shared_side_load`)
 come first; then the frame's side stages the persistent proxies call, which read

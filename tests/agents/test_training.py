@@ -205,7 +205,7 @@ def test_the_committed_search_spaces_sweep_their_entries(space_file: str, env_id
     fixed, space = load_space(default_file(algo).parent / "tune" / space_file)
     entry = load_hyperparams(env_id, algo)
     assert fixed["n_timesteps"] > 0 and set(space) <= set(entry)
-    if algo == "ppo":  # SidePush's entry is the sweep's best trial (README)
+    if algo == "ppo":  # SidePush's entry is the sweep's best trial (docs/baselines.md)
         for name, (kind, bounds) in space.items():
             value = entry[name]
             assert value in bounds if kind == "choice" else bounds[0] <= value <= bounds[1]

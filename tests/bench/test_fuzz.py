@@ -149,8 +149,8 @@ def test_the_named_fuzz_cases_keep_their_record(seed: int) -> None:
 
 
 #: The same at the ``fast`` preset (the default without CCD), from its long run
-#: (``graspenv bench --fuzz 10000 --preset fast``, README "Stability on hard
-#: cases"). Held since a bottom particle's fall carries no more than the pull's speed
+#: (``graspenv bench --fuzz 10000 --preset fast``, docs/stability.md, "Stability on
+#: hard cases"). Held since a bottom particle's fall carries no more than the pull's speed
 #: from one sub-step to the next: a particle put down at the edge of a 6.3 g box,
 #: its support measured on the box's top, slid off the edge under the press and fell
 #: 10 mm in four sub-steps, 1.45 mm into the table without CCD (6581). Held since the

@@ -96,7 +96,7 @@ def test_margins_follow_coulomb(base: SceneConfig, canonical: grid.CellResult) -
         / (mu_f * cell.footprint)
     )
     assert 0.5 * (slide_normal + turn_normal) == pytest.approx(canonical.grip_normal_n)
-    # A squeeze of 3 mm presses with tens of newtons (README, "Speed against error").
+    # A squeeze of 3 mm presses with tens of newtons (docs/speed.md, "Speed against error").
     assert 10.0 < canonical.grip_normal_n < 80.0
 
 
@@ -171,7 +171,7 @@ def test_a_cylinder_slips_when_no_contact_holds_not_when_its_arc_ends_slide(
     Without the sharing every stuck particle carries the same load, the least
     pressed at the ends of each fingertip's arc slide first while the most pressed
     hold it, and it creeps round its arc losing normal force: the slip against the
-    settled force is short by that loss (7.7 % of it, 7.5 % short; README, "A
+    settled force is short by that loss (7.7 % of it, 7.5 % short; docs/accuracy.md, "A
     fingertip shares its side load"). Until the sharing this test held only that."""
     cylinder = replace(grid.BASE_CELL, shape="cylinder", footprint=0.03, mass=0.1)
     # The grid's own cell, at its seeded place on the table.
@@ -306,7 +306,7 @@ def test_ccd_leaves_a_squeezed_particle_free_along_the_side(base: SceneConfig) -
     0.2-0.7°). Measured with each fingertip's load along the side shared by its
     particles' depths off, as it was then: with it on, the whole sphere turns this
     cylinder 0.01-0.30° short (2026-12-06), the shared load holding the turn where
-    CCD's held particles had not (README, "A fingertip shares its side load").
+    CCD's held particles had not (docs/accuracy.md, "A fingertip shares its side load").
     Measured at four sub-steps too, as it was then: since a frame by a tall object
     takes shorter sub-steps (``proxy.effective_mass_ratio``, 2026-12-07; eight
     here) the whole sphere turns it 0.01-0.37° short, the quarter 0.03-0.70°."""

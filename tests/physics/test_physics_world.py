@@ -586,7 +586,7 @@ def _side_normal_errors(
 def test_bullet_finds_a_cylinders_side_normal_only_to_a_few_degrees(
     make_world: Callable[..., PhysicsWorld],
 ) -> None:
-    """A measured fact the README's accuracy section leans on ("Bullet's contact
+    """A measured fact docs/accuracy.md leans on ("Bullet's contact
     normals on a cylinder"): against a box's face Bullet's normal for a particle is
     exact (its sphere-box algorithm), against a 4.5 cm cylinder's side it is off by
     about a degree on average and up to about 4° (GJK on the curved side, to a
@@ -594,7 +594,7 @@ def test_bullet_finds_a_cylinders_side_normal_only_to_a_few_degrees(
     as much). A normal a degree off turns 1.7 % of the particle's normal force
     along the side, 1.7 %/μ of its friction there. Measured here: 1.8° on average,
     4.3° at most; ten times the size, particles and all, 0.14° and 0.33°. If a
-    newer PyBullet makes it exact, this fails and the README's account of the
+    newer PyBullet makes it exact, this fails and docs/accuracy.md's account of the
     cylinders' remaining slip error should be measured again."""
     objects = [
         {"name": "box", "shape": "box", "size": [0.06, 0.06, 0.03]},

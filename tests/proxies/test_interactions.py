@@ -33,7 +33,7 @@ def test_2_rub_moves_a_light_object_and_slides_over_a_heavy_one() -> None:
     # the finger, a torque of 1.5 mN·m; the ring's twist friction (combined friction
     # 1.0 at its 8 mm radius) holds up to 5 mN·m. This asked for a turn of more than
     # 0.5° until a particle's contacts formed before it touched (2.2° then; 0.33°
-    # since, README, "Stability on hard cases").
+    # since, docs/stability.md, "Stability on hard cases").
     assert abs(light["turn_deg"]) < 1.0
     heavy = scenarios.top_rub_heavy(PERSISTENT)
     assert heavy["moved_mm"] < 2.0

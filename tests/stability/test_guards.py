@@ -88,7 +88,7 @@ GUARDS = [
     # the guard at 4, 5, 6 and 6.5 mm (fastest 1.56 m/s against 1.80, 0.82 mm in at
     # most), and a 10 g box at 6 mm: the case is measured with the sharing off.
     # The guard stays for the heavy objects' grip ("Particles outweighed light
-    # objects" in the README: the grid's worst turn 2.25° without it, 0.70° with it,
+    # objects" in docs/accuracy.md: the grid's worst turn 2.25° without it, 0.70° with it,
     # 2026-12-05).
     _off("proxy.mass_ratio", 0.0, _light_pinch_at_four_substeps, "speed"),
 ]

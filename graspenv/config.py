@@ -111,7 +111,7 @@ class ContactConfig:
             the specks from 153 to 0 contacts a frame and the turn's error from 30°
             to 0.3°. At 320 × 240 it is one pixel and drops nothing: there a
             fingertip cut by dropout holes leaves fragments of a few pixels that
-            matter to the grip (README, "Frame cost against contacts").
+            matter to the grip (README, "Model only what a scene needs").
         close_px: width of the elliptical kernel of a morphological closing (OpenCV)
             applied to each mask before it is traced, pixels, odd (an even kernel
             has no centre and shifts the mask); 0 (the default) leaves
@@ -698,8 +698,8 @@ class SceneConfig:
 
 #: Fidelity presets: section overrides from the cheapest to the most faithful, chosen
 #: from the speed-against-error frontier that ``graspenv bench`` measures and the
-#: grasp-space grid (README, "Speed against error", "Accuracy across the grasp
-#: space"). ``reference`` is the setting the benchmark's drift is measured against:
+#: grasp-space grid (docs/speed.md, "Speed against error"; docs/accuracy.md).
+#: ``reference`` is the setting the benchmark's drift is measured against:
 #: the default's body model (objects in reduced coordinates, contact ERP 0.4, the
 #: 20 N clamp: the default's since 2026-12-04, and its sub-steps that follow the
 #: motion, pinned here so that a scene file cannot make its reference coarser) with
@@ -708,7 +708,7 @@ class SceneConfig:
 #: the turn got worse (0.88° against 0.19°), so refining it does not converge.
 FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
     # The default's model without continuous collision detection, which cost half
-    # of the default's frame (Bullet's stage of the canonical turn: 1.31 ms a frame
+    # of the default's frame (docs/speed.md; Bullet's stage of the canonical turn: 1.31 ms a frame
     # with it, 0.33 ms without; per-stage minima of one bench run, CCD then sweeping
     # the whole particle). Every error within twice the default's (2026-12-06: turn
     # 0.18° against 0.11°, the slide, the slip, the two-hand carry and the noisy
@@ -738,8 +738,8 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 
 #: Each preset's measured error: the worst drift, millimetres, of the final object
 #: poses of the benchmark's scenarios against the reference preset, each the mean
-#: over three sub-pixel placements (``graspenv bench``, README "Speed against
-#: error"), with the sub-steps that follow the motion (``physics.substep_travel``);
+#: over three sub-pixel placements (``graspenv bench``, docs/speed.md, "Speed
+#: against error"), with the sub-steps that follow the motion (``physics.substep_travel``);
 #: the worst scenario is the flick for both (measured 2026-12-06 after CCD's sphere
 #: shrank, ``graspenv bench --replays 1``; the default's was the two-hand carry's
 #: 0.079 mm before). ``fast`` drifts no more than the default: both are within a

@@ -108,8 +108,8 @@ class ContactConfig:
             table it removes isolated flipped pixels and most pairs, while the
             smallest real contact, a light 5 mm fingertip, covers about 85 pixels:
             measured on the canonical turn with 0.05 % of pixels flipped, it takes
-            the specks from 153 to 0 contacts a frame and the turn's error from 30°
-            to 0.3°. At 320 × 240 it is one pixel and drops nothing: there a
+            the specks from 155 to 0 contacts a frame and the turn's error from 50°
+            to 0.3° (2026-12-07). At 320 × 240 it is one pixel and drops nothing: there a
             fingertip cut by dropout holes leaves fragments of a few pixels that
             matter to the grip (README, "Model only what a scene needs").
         close_px: width of the elliptical kernel of a morphological closing (OpenCV)

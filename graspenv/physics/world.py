@@ -214,9 +214,8 @@ class PhysicsWorld(Closeable):
         :class:`PhysicsWorld` builds it, so body ids, broadphase pair order and every
         later result are bit-identical to those of ``PhysicsWorld(scene)`` given the
         same commands, by construction. It costs about as much as building the
-        particle pool's first batch (``physics.pool_batch`` bodies; timings in the
-        README); :meth:`reset` puts the same scene back for less, but without that
-        guarantee.
+        particle pool's first batch (``physics.pool_batch`` bodies); :meth:`reset`
+        puts the same scene back for less, but without that guarantee.
 
         Every particle id and rigid proxy handle handed out before is invalid
         afterwards (:attr:`pool` and :attr:`rigid_proxies` are new objects), and
@@ -445,7 +444,7 @@ class PhysicsWorld(Closeable):
         """A 3-D view of the table, the objects and the active particles.
 
         Software rendering (Bullet's TinyRenderer): headless, no GUI or EGL (its
-        cost, which grows with the pooled particles, is in the README). Parked
+        cost grows with the pooled particles). Parked
         particles lie beyond the far clipping plane and never show.
 
         Args:

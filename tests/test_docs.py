@@ -14,7 +14,7 @@ DOCUMENTS = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
 
 #: A Markdown link or image: [text](target) or ![alt](target).
 LINK = re.compile(r"!?\[[^\]]*\]\(([^)\s]+)\)")
-#: A docs file named in code or prose: docs/name.md or docs/name.png.
+#: A docs file named in code or prose: docs/<name>.md or docs/<name>.png.
 DOCS_FILE = re.compile(r"\bdocs/[A-Za-z0-9_]+\.(?:md|png)\b")
 
 

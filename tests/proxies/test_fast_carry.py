@@ -13,11 +13,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from graspenv.bench.interactions import pinch
+from graspenv.bench.interactions import pinch, play
 from graspenv.bench.scenarios import with_objects
 from graspenv.config import ObjectConfig, load_config
 from graspenv.simulation import Simulation
-from graspenv.surface.render import render_mask
 
 #: 5 cm across the grip, 4 cm along the carry, 4 cm tall, 100 g: its weight holds
 #: it against a push at a particle's height up to about g · 20 / 18 = 11 m/s².
@@ -35,12 +34,8 @@ def _carried(stack_layers: int, speed: float) -> float:
         TALL_BOX, 0.003, slide=(0.0, CARRY), turn_frames=0, slide_frames=frames, hold_frames=10
     )
     with Simulation(with_objects(base, TALL_BOX)) as sim:
-        start, _ = sim.object_pose("box")
-        empty = np.zeros(sim.surface.shape, np.uint8)
-        for _, hand in script.frames(sim.surface):
-            sim.step(empty if hand is None else render_mask(hand, sim.surface))
-        end, _ = sim.object_pose("box")
-    return float(np.hypot(end[0] - start[0], end[1] - start[1] - CARRY)) / CARRY
+        travel = play(sim, script, "box").travel()
+    return float(np.hypot(travel[0], travel[1] - CARRY)) / CARRY
 
 
 def test_a_single_layer_carries_a_tall_box_off_slowly() -> None:

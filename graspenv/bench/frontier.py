@@ -23,7 +23,12 @@ the synthetic mask is not counted) and of each of its stages, the real-time fact
 against the scene's camera rate, and the share of frame time inside Bullet's own
 ``stepSimulation``. Each frame's stage times are the smallest over ``replays``
 runs of the same masks (the speed of a shared machine varies by a third from one
-second to the next; the minimum keeps the work, not the neighbours). Each setting
+second to the next; the minimum keeps the work, not the neighbours). Before any
+timed run, :func:`warm_up` plays every scenario and every setting once untimed: the
+first call of each compiled kernel in a process loads it from numba's cache, or
+compiles it on a machine's first run, and the frame that pays for it would
+otherwise count (measured 2026-12-07 with the cache warm: the first canonical turn
+of a process ran at 406 frames a second, the next two at 605 and 590). Each setting
 is the default scene with one knob changed (a one-at-a-time sweep) plus the named
 presets.
 """
@@ -58,6 +63,7 @@ __all__ = [
     "play_task",
     "run_bench",
     "summarise",
+    "warm_up",
 ]
 
 #: The reference fidelity (graspenv/config.py, FIDELITY_PRESETS, says what it holds).
@@ -159,9 +165,12 @@ def play_task(
     scenario: str, scene: SceneConfig, offsets: Sequence[Offset], replays: int
 ) -> tuple[list[Played], str]:
     """One Ray task of ``graspenv bench --ray``: a scenario at one setting, every
-    placement, in one worker (so that its speed is one node's), and that node."""
+    placement, in one worker (so that its speed is one node's), and that node. The
+    worker may be fresh, so the first placement is played once untimed before
+    (:func:`warm_up`)."""
     from graspenv import cluster
 
+    SCENARIOS[scenario](scene, offsets[0], replays=1)
     plays = [SCENARIOS[scenario](scene, offset, replays=replays) for offset in offsets]
     return plays, cluster.node()
 
@@ -219,6 +228,26 @@ def summarise(
     )
 
 
+def warm_up(
+    order: Sequence[str],
+    scenarios: Sequence[str],
+    base: SceneConfig,
+    progress: Callable[[str], None] | None = None,
+) -> None:
+    """Play every scenario at the first setting of ``order``, and the first scenario at
+    every other setting, once each, unplaced and untimed (module docstring): between
+    them they call every compiled kernel the timed runs will, so that none of those
+    runs pays a kernel's first load or compile. Nothing is kept: each play builds its
+    own simulation, so the runs after are the same to the bit."""
+    if progress is not None:
+        progress("warming up: every scenario and setting once, untimed")
+    first = base.replace(**SETTINGS[order[0]])
+    for scenario in scenarios:
+        SCENARIOS[scenario](first, (0.0, 0.0), replays=1)
+    for setting in order[1:]:
+        SCENARIOS[scenarios[0]](base.replace(**SETTINGS[setting]), (0.0, 0.0), replays=1)
+
+
 def run_bench(
     settings: Sequence[str],
     scenarios: Sequence[str],
@@ -239,7 +268,8 @@ def run_bench(
         placements: sub-pixel placements per scenario and setting (module docstring);
             the same offsets, from the base scene's pixel size, for every setting.
         replays: timing runs of every scenario; speeds are per-frame minimums over
-            them (:func:`play`); errors come from the first.
+            them (:func:`play`); errors come from the first. Every timed run comes
+            after :func:`warm_up`.
         ray, address: play each (setting, scenario) as one Ray task
             (:func:`play_task`) on a local instance or the cluster at ``address``.
             The errors are the local run's; each row's speed is one task's on one
@@ -261,6 +291,7 @@ def run_bench(
     order = ["reference"] + [s for s in settings if s != "reference"]
     if ray or address is not None:
         return _run_on_ray(order, settings, scenarios, base, offsets, replays, address)
+    warm_up(order, scenarios, base, progress)
     total = len(order) * len(scenarios)
     done = 0
     for setting in order:

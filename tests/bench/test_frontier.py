@@ -11,9 +11,10 @@ from dataclasses import replace
 from pathlib import Path
 
 import cv2
+import numpy as np
 import pytest
 
-from graspenv.bench.frontier import SETTINGS, measure, run_bench
+from graspenv.bench.frontier import SETTINGS, measure, run_bench, warm_up
 from graspenv.bench.results import read_csv, write_outputs
 from graspenv.bench.scenarios import SCENARIOS, SLIP_RATE, placement_offsets, slip, turn
 from graspenv.config import SceneConfig, load_config
@@ -98,6 +99,29 @@ def test_bench_writes_csv_table_and_pareto_plot(tmp_path: Path) -> None:
     (tmp_path / "other.csv").write_text("a,b\n1,2\n")
     with pytest.raises(ValueError, match=r"not a bench\.csv"):
         read_csv(tmp_path / "other.csv")
+
+
+def test_the_warm_up_plays_each_scenario_and_setting_and_changes_no_result(
+    base: SceneConfig, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Before any timed run the bench plays every scenario at the first setting and
+    the first scenario at every other setting once (so that no timed frame loads or
+    compiles a kernel); the runs after it are the same to the bit."""
+    before, _ = measure("default", "turn", base, None)
+    played: list[tuple[str, int]] = []
+    for name, scenario in list(SCENARIOS.items()):
+
+        def spy(scene: SceneConfig, offset: object, replays: int = 1, _n=name, _s=scenario):
+            played.append((_n, scene.physics.substeps))
+            return _s(scene, offset, replays=replays)
+
+        monkeypatch.setitem(SCENARIOS, name, spy)
+    warm_up(["reference", "default", "substeps=2"], ["turn", "slip"], base)
+    assert played == [("turn", 8), ("slip", 8), ("turn", 4), ("turn", 2)]
+    monkeypatch.undo()
+    after, _ = measure("default", "turn", base, None)
+    np.testing.assert_equal(after.errors, before.errors)  # NaN equals NaN here
+    assert after.tracking_rms_mm == before.tracking_rms_mm
 
 
 def test_unknown_names_are_refused() -> None:

@@ -236,9 +236,9 @@ def warm_up(
 ) -> None:
     """Play every scenario at the first setting of ``order``, and the first scenario at
     every other setting, once each, unplaced and untimed (module docstring): between
-    them they call every compiled kernel the timed runs will, so that none of those
-    runs pays a kernel's first load or compile. Nothing is kept: each play builds its
-    own simulation, so the runs after are the same to the bit."""
+    them they reach the compiled kernels that each scenario and each setting bring,
+    so that the timed runs do not pay their first load or compile. Nothing is kept:
+    each play builds its own simulation, so the runs after are the same to the bit."""
     if progress is not None:
         progress("warming up: every scenario and setting once, untimed")
     first = base.replace(**SETTINGS[order[0]])

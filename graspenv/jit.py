@@ -19,7 +19,10 @@ Settings, and why:
   its old code from another module's cache (measured: a changed landing rule in
   ``graspenv/contacts/resample.py`` left the bench's noisy turn at its old 4.46°
   until ``graspenv/proxies/persistent.py`` changed too; 2.03° once it ran). Any
-  change to the package now compiles everything once.
+  change to the package now compiles everything once. Each source tree's folder
+  stays behind it (about 6 MB; this project's own checkout had kept ten), so when a
+  process makes a new one it removes the other trees' folders that nothing has
+  written to for :data:`STALE_DAYS` days (:func:`prune_stale`).
 - no ``fastmath``: IEEE arithmetic in the order written, so runs stay bit-identical
   from process to process and machine code to machine code.
 - ``error_model="numpy"``: a division by zero gives inf or NaN as in numpy instead
@@ -32,13 +35,15 @@ from __future__ import annotations
 
 import hashlib
 import os
+import shutil
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar, cast
 
 import numba
 
-__all__ = ["cache_folder", "njit", "sources_key"]
+__all__ = ["STALE_DAYS", "cache_folder", "njit", "prune_stale", "sources_key"]
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -71,8 +76,38 @@ def cache_folder(root: Path = _PACKAGE) -> Path:
     return base / f"graspenv-{sources_key(root)}"
 
 
+#: Days without a write after which another source tree's cache folder is removed.
+STALE_DAYS = 7.0
+
+
+def prune_stale(folder: Path, days: float = STALE_DAYS) -> list[Path]:
+    """Remove the ``graspenv-*`` folders beside ``folder`` (other source trees'
+    caches) whose newest file is older than ``days`` days; ``folder`` itself is
+    kept. A cache is only ever compiled again, so nothing is lost; one that another
+    process still uses is written afresh if that process compiles again.
+
+    Returns:
+        The folders removed.
+    """
+    if not folder.parent.is_dir():
+        return []
+    cutoff = time.time() - days * 86400.0
+    removed = []
+    for other in sorted(folder.parent.glob("graspenv-*")):
+        if other == folder or not other.is_dir():
+            continue
+        newest = max((p.stat().st_mtime for p in other.rglob("*")), default=0.0)
+        if max(newest, other.stat().st_mtime) < cutoff:
+            shutil.rmtree(other, ignore_errors=True)
+            removed.append(other)
+    return removed
+
+
+_FOLDER = cache_folder()
+if not _FOLDER.exists():  # a new source tree: the moment old ones are left behind
+    prune_stale(_FOLDER)
 # Read by numba when each cached function is decorated, so set before any is.
-numba.config.CACHE_DIR = str(cache_folder())  # type: ignore[attr-defined]
+numba.config.CACHE_DIR = str(_FOLDER)  # type: ignore[attr-defined]
 
 
 def njit(function: F) -> F:

@@ -94,3 +94,31 @@ def test_the_cache_folder_changes_with_any_source(
     assert sources_key(package) != before
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
     assert cache_folder(package) == tmp_path / "cache" / f"graspenv-{sources_key(package)}"
+
+
+def test_other_source_trees_caches_untouched_for_a_week_are_removed(tmp_path: Path) -> None:
+    import os
+    import time
+
+    from graspenv.jit import STALE_DAYS, prune_stale
+
+    now = time.time()
+    current = tmp_path / "graspenv-current"
+    stale = tmp_path / "graspenv-stale"
+    recent = tmp_path / "graspenv-recent"  # an old folder with a file written today
+    other = tmp_path / "someone-else"
+    for folder in (current, stale, recent, other):
+        (folder / "kernels").mkdir(parents=True)
+        (folder / "kernels" / "k.nbi").write_bytes(b"x")
+    old = now - (STALE_DAYS + 1) * 86400
+    for folder in (current, stale, recent, other):
+        for path in (folder / "kernels" / "k.nbi", folder / "kernels", folder):
+            os.utime(path, (old, old))
+    os.utime(recent / "kernels" / "k.nbi", (now, now))
+    assert prune_stale(current) == [stale]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [
+        "graspenv-current",
+        "graspenv-recent",
+        "someone-else",
+    ]
+    assert prune_stale(tmp_path / "missing" / "graspenv-x") == []

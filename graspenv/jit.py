@@ -94,13 +94,23 @@ def prune_stale(folder: Path, days: float = STALE_DAYS) -> list[Path]:
     cutoff = time.time() - days * 86400.0
     removed = []
     for other in sorted(folder.parent.glob("graspenv-*")):
-        if other == folder or not other.is_dir():
-            continue
-        newest = max((p.stat().st_mtime for p in other.rglob("*")), default=0.0)
-        if max(newest, other.stat().st_mtime) < cutoff:
+        if other != folder and other.is_dir() and _newest_write(other) < cutoff:
             shutil.rmtree(other, ignore_errors=True)
             removed.append(other)
     return removed
+
+
+def _newest_write(folder: Path) -> float:
+    """The latest modification time of ``folder`` or anything in it; a file that
+    vanishes while it is read (another process pruning, or a dangling link) does not
+    count, so that importing the package never fails on another tree's cache."""
+    newest = 0.0
+    for path in [folder, *folder.rglob("*")]:
+        try:
+            newest = max(newest, path.stat().st_mtime)
+        except OSError:
+            continue
+    return newest
 
 
 _FOLDER = cache_folder()

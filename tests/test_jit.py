@@ -110,6 +110,9 @@ def test_other_source_trees_caches_untouched_for_a_week_are_removed(tmp_path: Pa
     for folder in (current, stale, recent, other):
         (folder / "kernels").mkdir(parents=True)
         (folder / "kernels" / "k.nbi").write_bytes(b"x")
+    # A file gone while the folder is read (another process pruning it): as a
+    # dangling link, whose stat fails as a vanished file's does.
+    (stale / "kernels" / "gone.nbi").symlink_to(stale / "nowhere")
     old = now - (STALE_DAYS + 1) * 86400
     for folder in (current, stale, recent, other):
         for path in (folder / "kernels" / "k.nbi", folder / "kernels", folder):

@@ -239,6 +239,8 @@ def warm_up(
     them they reach the compiled kernels that each scenario and each setting bring,
     so that the timed runs do not pay their first load or compile. Nothing is kept:
     each play builds its own simulation, so the runs after are the same to the bit."""
+    if not scenarios:
+        return
     if progress is not None:
         progress("warming up: every scenario and setting once, untimed")
     first = base.replace(**SETTINGS[order[0]])

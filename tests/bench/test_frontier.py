@@ -124,6 +124,10 @@ def test_the_warm_up_plays_each_scenario_and_setting_and_changes_no_result(
     assert after.tracking_rms_mm == before.tracking_rms_mm
 
 
+def test_a_bench_of_no_scenario_plays_nothing() -> None:
+    assert run_bench(["default"], []) == []
+
+
 def test_unknown_names_are_refused() -> None:
     with pytest.raises(ValueError, match="unknown setting"):
         run_bench(["warp speed"], ["turn"])

@@ -361,13 +361,9 @@ class ProxyConfig:
             (README, "Points that land where the contact moved them").
         smoothing: gain of an alpha-beta filter on each followed contour point (1 =
             off, the points as the contour gives them): a point moves this share of
-            the way from where its own velocity predicts it to where it is seen; a
-            steady motion is followed without lag. Made for a noisy table, whose
-            edges wobble by a pixel a frame (docs/design.md, section 3b), and on by
-            default since 2026-12-07: a clean mask's pixelated outline moves its
-            points too, and at 0.5 the grasp-space grid turns half as far off (0.08°
-            against 0.16° on average) and slides nearer (docs/accuracy.md, "The
-            pixel staircase costs the turn").
+            the way from where its own velocity predicts it to where it is seen. For
+            a noisy table, whose edges wobble by a pixel a frame (docs/design.md,
+            section 3b); a steady motion is followed without lag.
         smoothing_gate: a contact whose centroid lands further than this from
             where the filter expects it, metres, is taken as seen (a strike or a
             sudden start is motion, not noise).
@@ -418,7 +414,7 @@ class ProxyConfig:
     track_hand_rotation: bool = True
     predicted_resampling: bool = True
     follow_points: bool = True
-    smoothing: float = 0.5
+    smoothing: float = 1.0
     smoothing_gate: float = 0.003
     hold_time: float = 0.0
     share_side_load: bool = True

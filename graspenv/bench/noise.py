@@ -6,10 +6,9 @@ masks seen through each noise level of :data:`LEVELS` (the two kinds of table of
 with each clean-up of :data:`CLEANUPS` in the contact pipeline: nothing, the
 smallest-contact filter (``contacts.min_area``, on by default), and the filter with
 a morphological closing (``contacts.close_px``), a fill of flickering dropouts from
-the previous frame (``contacts.fill_px``) or both, both without the proxies'
-smoothing of followed contours (``proxy.smoothing``, on by default since
-2026-12-07 and in every other row), and both after a vote of each pixel over the
-last three or five masks (``contacts.vote_frames``). Each run is
+the previous frame (``contacts.fill_px``) or both, both with the proxies'
+smoothing of followed contours (``proxy.smoothing``), and both after a vote of each
+pixel over the last three or five masks (``contacts.vote_frames``). Each run is
 played with two noise seeds at a sub-pixel placement of its own.
 
 Ground truth is the ideal rigid grasp: the object turns with the fingers and ends
@@ -45,7 +44,6 @@ from graspenv.bench.grid import (
 )
 from graspenv.bench.jobs import collect_jobs
 from graspenv.bench.results import pipe_table, write_rows
-from graspenv.config import ProxyConfig
 from graspenv.plots import line_chart, write_png
 from graspenv.surface.noise import TABLE_NOISE, SensorNoise
 
@@ -80,7 +78,7 @@ def _cleanup(
     close: int = 0,
     fill: int = 0,
     votes: int = 1,
-    smoothing: float = ProxyConfig.smoothing,
+    smoothing: float = 1.0,
 ) -> dict[str, dict[str, Any]]:
     """One clean-up as scene sections, every clean-up setting given, so that a scene
     file's own (``envs_configs/di_table.toml``) does not carry into the others."""
@@ -103,7 +101,7 @@ CLEANUPS: dict[str, dict[str, dict[str, Any]]] = {
     "filter + close 5 px": _cleanup(close=5),
     "filter + fill 2 px": _cleanup(fill=2),
     "filter + close 5 + fill 2": _cleanup(close=5, fill=2),
-    "close 5 + fill 2, no smoothing": _cleanup(close=5, fill=2, smoothing=1.0),
+    "close 5 + fill 2 + smoothing 0.5": _cleanup(close=5, fill=2, smoothing=0.5),
     "vote 3 + close 5 + fill 2": _cleanup(close=5, fill=2, votes=3),
     "vote 5 + close 5 + fill 2": _cleanup(close=5, fill=2, votes=5),
 }

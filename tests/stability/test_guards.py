@@ -44,11 +44,9 @@ def _strike_at_four_substeps() -> Case:
 
 def _light_pinch_at_four_substeps() -> Case:
     obj = cases.box(mass=0.005)
-    # The plain law along the side and the contour points as seen: with the shared
-    # side load, or the smoothing of followed points, this pinch holds without the
-    # guard (below).
-    proxy = {"share_side_load": False, "smoothing": 1.0}
-    config = cases.scene(obj, physics={"max_substeps": 4}, proxy=proxy)
+    # The plain law along the side: with the shared side load this pinch holds
+    # without the guard (below).
+    config = cases.scene(obj, physics={"max_substeps": 4}, proxy={"share_side_load": False})
     return cases.pinch(obj, config, "pinch 5 g", depth=0.006)
 
 
@@ -89,10 +87,6 @@ GUARDS = [
     # (proxy.share_side_load, 2026-12-06) the pinch keeps every invariant without
     # the guard at 4, 5, 6 and 6.5 mm (fastest 1.56 m/s against 1.80, 0.82 mm in at
     # most), and a 10 g box at 6 mm: the case is measured with the sharing off.
-    # Since the followed points are smoothed by default (proxy.smoothing 0.5,
-    # 2026-12-07) it holds without the guard with the sharing off too (0.15 m/s,
-    # 0.82 mm in; 2.73 m/s against a bound of 1.81 with the points as seen): the
-    # case is measured with the smoothing off as well.
     # The guard stays for the heavy objects' grip ("Particles outweighed light
     # objects" in docs/accuracy.md: the grid's worst turn 2.25° without it, 0.70° with it,
     # 2026-12-05).

@@ -89,8 +89,9 @@ def test_a_new_particle_moves_along_its_neighbours_side_and_away_but_not_into_it
     np.testing.assert_allclose(shifted[0] @ np.array([0.8, -0.6]), -0.0024, atol=1e-15)
 
 
-def _cylinder_distance(points: np.ndarray, position: np.ndarray, rotation: np.ndarray,
-                       radius: float, height: float) -> np.ndarray:
+def _cylinder_distance(
+    points: np.ndarray, position: np.ndarray, rotation: np.ndarray, radius: float, height: float
+) -> np.ndarray:
     """Signed distance (m) from each point (N, 3) to a solid cylinder (negative inside)."""
     local = (points - position) @ rotation.reshape(3, 3)
     out_r = np.hypot(local[:, 0], local[:, 1]) - radius

@@ -110,13 +110,13 @@ def test_the_seeded_sample_keeps_its_record() -> None:
 #: reverted): particles put down beside the foot of a 1.62 kg cylinder of friction
 #: 1.73 under five fingertips pressed it at 68 N, spun it to 17 rad/s and flung it
 #: at 2.40 m/s against a bound of 1.97 (9947; put on its top face, they do not).
-#: With the followed points smoothed (``proxy.smoothing`` 0.5, the default since
-#: 2026-12-07) it broke again, 2.01 m/s: particles put down beside their anchors
+#: With the followed points smoothed (``proxy.smoothing`` 0.5, tried as the default
+#: on 2026-12-07) it broke again, 2.01 m/s: particles put down beside their anchors
 #: started up to 2.7 mm inside the leaning cylinder (no side to keep the offset
-#: out), one pressed it at 434 N in a sub-step and it flew 9 cm up (1.37 m/s
-#: without the smoothing, under the bound but no less wrong). A particle that would
-#: start inside an object is now put down where its point is: the fingers push the
-#: cylinder along at 0.33 m/s at most.
+#: out), one pressed it at 434 N in a sub-step and it flew 9 cm up (without the
+#: smoothing 77 mm, within the bound but no less wrong). A particle that would start
+#: inside an object is now put down where its point is: the fingers push the
+#: cylinder along at 0.68 m/s at most (tests/proxies/test_put_down.py).
 HELD = (
     509,
     911,

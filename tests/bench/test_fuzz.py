@@ -114,9 +114,11 @@ def test_the_seeded_sample_keeps_its_record() -> None:
 #: on 2026-12-07) it broke again, 2.01 m/s: particles put down beside their anchors
 #: started up to 2.7 mm inside the leaning cylinder (no side to keep the offset
 #: out), one pressed it at 434 N in a sub-step and it flew 9 cm up (without the
-#: smoothing 77 mm, within the bound but no less wrong). A particle that would start
-#: inside an object is now put down where its point is: the fingers push the
-#: cylinder along at 0.68 m/s at most (tests/proxies/test_put_down.py).
+#: smoothing 77 mm, within the bound but no less wrong). A new particle beside its
+#: anchor that would overlap a box's or a cylinder's footprint by more than a quarter
+#: of its radius is now put down where its point is: the fingers push the cylinder
+#: along at 0.68 m/s at most (tests/proxies/test_put_down.py; docs/stability.md,
+#: "Seed 9947 again").
 HELD = (
     509,
     911,

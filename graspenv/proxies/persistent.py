@@ -26,9 +26,10 @@ real fingertip. One camera frame:
    particle moved by the new point's offset from that point, less any part of the
    offset into the side it presses; not moved off a top face), or, farther than
    :data:`FAR_FROM_ANCHOR` contour spacings (or particle diameters) from that
-   point's particle (the other half of a merged contact), on whatever lies under the
-   point itself, as a new contact's are; previous points whose successor did not
-   name them release theirs.
+   point's particle (the other half of a merged contact), or where it would overlap
+   a box's or a cylinder's footprint by more than :data:`MOST_OVERLAP` of its
+   radius, on whatever lies under the point itself, as a new contact's are;
+   previous points whose successor did not name them release theirs.
 4. *New contact.* One particle (stack) per contour point, put down by ray casting on
    whatever is there (table or object top); a point just outside an object's side
    goes on the table beside it, clear of the side.
@@ -98,9 +99,11 @@ __all__ = ["PersistentProxies"]
 #: sliding grip's leading edge down too (the slide's error 0.27 -> 0.88 mm).
 FAR_FROM_ANCHOR = 2.0
 
-#: A particle put down beside its anchor's on the table may overlap an object's
-#: footprint by at most this share of its radius (a squeezing anchor's own press is
-#: hundredths of a millimetre); beyond it the point is put down where it is.
+#: A particle put down beside its anchor's on the table may overlap a box's or a
+#: cylinder's footprint by at most this share of its radius (a squeezing anchor's
+#: own press is hundredths of a millimetre); beyond it the point is put down where
+#: it is. A leaning cylinder's footprint is its shadow's hull, wider than its foot:
+#: there a point beside the overhang may be put down afresh needlessly, under it.
 MOST_OVERLAP = 0.25
 
 
@@ -347,9 +350,9 @@ class PersistentProxies:
             outward = self._world.footprint_side(start[on_table, 0, :2], 2.0 * pool.radius)[2]
             start[on_table, :, :2] += not_into(offset, outward)[:, None, :]
             # Nor into an object: beside a cylinder that leans (no side to keep the
-            # offset out of) a new particle started 2.7 mm inside a spun 1.62 kg
-            # one, whose push threw it at 2.0 m/s (fuzz seed 9947). Those points are
-            # put down where they are instead, as a touch-down's are.
+            # offset out of) a new particle started with its centre inside a spun
+            # 1.62 kg one, which it threw 77 mm up (fuzz seed 9947). Those points
+            # are put down where they are instead, as a touch-down's are.
             inside = on_table[self._overlapping(start[on_table, 0, :2])]
             lost = np.concatenate([lost, beside[inside]])
             keep = np.ones(len(beside), bool)
@@ -361,8 +364,8 @@ class PersistentProxies:
             particles[beside] = ids
             born[beside] = True
         # Points in contacts where nothing was kept, and new points far from their
-        # anchor's particle: the culling puts down what is near, or else they are
-        # put down afresh.
+        # anchor's particle or that would start in an object beside it: the culling
+        # puts down what is near, or else they are put down afresh.
         if lost.size and not self._cull:
             ids = pool.acquire(lost.size * layers).reshape(lost.size, -1)
             self._put_down(ids, current[lost])
@@ -472,9 +475,10 @@ class PersistentProxies:
             born[near] = True
 
     def _overlapping(self, xy: NDArray[np.float64]) -> NDArray[np.bool_]:
-        """Which table-level particle centres (metres, (K, 2)) overlap a box's or a
-        cylinder's footprint by more than :data:`MOST_OVERLAP` of their radius (a
-        ball's overhang leaves room under it)."""
+        """Which table-level particle centres (metres, world frame, (K, 2)) overlap a
+        box's or a cylinder's footprint by more than :data:`MOST_OVERLAP` of their
+        radius (a ball's overhang leaves room under it; a point deeper in a ball's
+        disc than in a box it also lies in counts as the ball's)."""
         world = self._world
         owner, depth = world.footprint_depth(xy)
         solid = np.array([o.shape != "sphere" for o in world.scene.objects] + [False], bool)

@@ -47,7 +47,7 @@ import pybullet as pb
 from numpy.typing import ArrayLike, NDArray
 
 from graspenv.config import SceneConfig
-from graspenv.geometry import footprint_depths, footprint_sides
+from graspenv.geometry import SHAPE_CODES, footprint_depths, footprint_sides
 from graspenv.physics.bodies import EDGE_RADIUS, build_scene, place_objects
 from graspenv.physics.control import REST_TOLERANCE, ParticleDrive, SupportPlanes
 from graspenv.physics.pool import ParticlePool
@@ -739,6 +739,10 @@ class PhysicsWorld(Closeable):
         ``physics.control_time``, or the configured sub-step if that is longer."""
         return max(self.scene.physics.control_time, frame_dt / self.substeps)
 
+    def balls(self) -> NDArray[np.bool_]:
+        """Which objects are balls, whose footprint overhangs the table, shape (O,)."""
+        return self._bodies.shape_codes == SHAPE_CODES["sphere"]
+
     def put_down(self, xy: ArrayLike, clear_sides: bool = True) -> NDArray[np.float64]:
         """Where a particle lowered onto each point goes: its centre, metres, (N, 3).
 
@@ -765,8 +769,7 @@ class PhysicsWorld(Closeable):
         if clear_sides:
             owner, depth, outward = self.footprint_side(points, 2.0 * radius)
             near = np.flatnonzero((owner >= 0) & (depth <= 0.0) & (depth > -2.0 * radius))
-            balls = np.array([o.shape == "sphere" for o in self.scene.objects], bool)
-            near = near[~balls[owner[near]]]
+            near = near[~self.balls()[owner[near]]]
             outward = outward[near]
             sided = np.any(outward != 0.0, axis=1)
             near, outward = near[sided], outward[sided]

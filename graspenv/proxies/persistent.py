@@ -353,11 +353,10 @@ class PersistentProxies:
             # offset out of) a new particle started with its centre inside a spun
             # 1.62 kg one, which it threw 77 mm up (fuzz seed 9947). Those points
             # are put down where they are instead, as a touch-down's are.
-            inside = on_table[self._overlapping(start[on_table, 0, :2])]
-            lost = np.concatenate([lost, beside[inside]])
-            keep = np.ones(len(beside), bool)
-            keep[inside] = False
-            beside, anchors, start = beside[keep], anchors[keep], start[keep]
+            fresh = np.zeros(len(beside), bool)
+            fresh[on_table] = self._overlapping(start[on_table, 0, :2])
+            lost = np.concatenate([lost, beside[fresh]])
+            beside, anchors, start = beside[~fresh], anchors[~fresh], start[~fresh]
         if beside.size:
             ids = pool.acquire(beside.size * layers).reshape(-1, layers)
             pool.place(ids.reshape(-1), start.reshape(-1, 3))
@@ -481,8 +480,10 @@ class PersistentProxies:
         disc than in a box it also lies in counts as the ball's)."""
         world = self._world
         owner, depth = world.footprint_depth(xy)
-        solid = np.array([o.shape != "sphere" for o in world.scene.objects] + [False], bool)
-        return solid[owner] & (depth > -(1.0 - MOST_OVERLAP) * world.pool.radius)
+        # False wherever there is no object (owner -1, depth -inf).
+        deep = depth > -(1.0 - MOST_OVERLAP) * world.pool.radius
+        deep[deep] = ~world.balls()[owner[deep]]
+        return deep
 
     def _put_down(self, ids: NDArray[np.int64], points: NDArray[np.float64]) -> None:
         """Place stacks where particles lowered onto their points come to rest

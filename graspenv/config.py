@@ -54,6 +54,9 @@ MOST_VOTE_FRAMES = 15
 
 #: Particle sphere radius, metres, by default (``proxy.particle_radius``).
 DEFAULT_PARTICLE_RADIUS = 0.002
+#: Pairs of shrink-free passes along each outline at the default
+#: (``ContactConfig.outline_smoothing``).
+OUTLINE_SMOOTHING = 6
 
 ShapeName = Literal["box", "sphere", "cylinder"]
 ProxyName = Literal["persistent", "instant", "rigid"]
@@ -136,6 +139,17 @@ class ContactConfig:
             It averages out edge jitter that changes from frame to frame, which the
             closing and the fill do not, at the price of a lag of (n − 1)/2 frames on
             a contact's motion and on a lift (README, "A real sensor's masks").
+        outline_smoothing: pairs of Taubin's shrink-free smoothing passes along each
+            traced outline, after its own [-1, 4, 10, 4, -1] / 16 filter
+            (:mod:`graspenv.contacts.extract`); 0 turns it off. They damp what is
+            left of the pixel staircase, which the contour's points would otherwise
+            follow from frame to frame as the fingers cross the pixels, without
+            shrinking a fingertip's outline (its scatter about a true ellipse's edge
+            0.177 → 0.143 px RMS, its mean −0.016 → −0.005 px,
+            ``python -m graspenv.bench.outline``). Six (the default) narrow the
+            turn's scatter over sub-pixel placements by a quarter to two fifths and
+            let a finer contour (the ``reference`` preset's) turn without the
+            staircase's lag (docs/accuracy.md, "A reference that converges").
     """
 
     spacing: float | Literal["auto"] = "auto"
@@ -144,6 +158,7 @@ class ContactConfig:
     close_px: int = 0
     fill_px: int = 0
     vote_frames: int = 1
+    outline_smoothing: int = OUTLINE_SMOOTHING
 
     def __post_init__(self) -> None:
         if self.spacing != "auto":
@@ -151,7 +166,7 @@ class ContactConfig:
         _positive("contacts.match_radius", (self.match_radius,))
         if self.min_area != "auto" and self.min_area < 0:
             raise ConfigError(f"contacts.min_area must be >= 0 or 'auto', got {self.min_area}")
-        for key in ("close_px", "fill_px"):
+        for key in ("close_px", "fill_px", "outline_smoothing"):
             value = getattr(self, key)
             if not isinstance(value, int) or isinstance(value, bool) or value < 0:
                 raise ConfigError(f"contacts.{key} must be a whole number >= 0, got {value!r}")
@@ -699,13 +714,24 @@ class SceneConfig:
 #: Fidelity presets: section overrides from the cheapest to the most faithful, chosen
 #: from the speed-against-error frontier that ``graspenv bench`` measures and the
 #: grasp-space grid (docs/speed.md, "Speed against error"; docs/accuracy.md).
-#: ``reference`` is the setting the benchmark's drift is measured against:
-#: the default's body model (objects in reduced coordinates, contact ERP 0.4, the
-#: 20 N clamp: the default's since 2026-12-04, and its sub-steps that follow the
-#: motion, pinned here so that a scene file cannot make its reference coarser) with
-#: twice the sub-steps and solver iterations. A finer contour (2 mm) is not in it:
-#: with the particle mass fixed it doubles the grip's stiffness and normal force, and
-#: the turn got worse (0.88° against 0.19°), so refining it does not converge.
+#: ``reference`` is the setting the benchmark's drift is measured against: the
+#: default refined in space and in time, each pinned so that a scene file cannot make
+#: its reference coarser. In time: the default's body model (objects in reduced
+#: coordinates, contact ERP 0.4, the 20 N clamp, CCD) with twice the sub-steps and
+#: solver iterations. In space: the contour sampled at half the default's spacing
+#: (2 mm at the default's 2 mm particles, :data:`REFERENCE_CONTOUR`), each particle
+#: half as heavy so that the grip is as stiff per millimetre of contour (half
+#: ``proxy.particle_mass``, ``mass_ratio`` and ``down_force``: the same
+#: ``SceneConfig.particle_scale``), the outline smoothed as at the default. Without
+#: the shrink-free outline smoothing (``contacts.outline_smoothing``) the finer
+#: contour followed the pixels' staircase and turned further off (0.254° against
+#: 0.159° over the grid at seed 0); with it, over the grid at four placements, paired
+#: with the default: turn 0.138° against 0.166°, slide 0.100 % against 0.115 %, slip
+#: 0.44 % against 0.63 %, every cylinder within 5 % of Coulomb (docs/accuracy.md,
+#: "A reference that converges").
+#: The reference's contour spacing, metres: half the default's at its particle radius.
+REFERENCE_CONTOUR = DEFAULT_PARTICLE_RADIUS
+
 FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
     # The default's model without continuous collision detection, which cost half
     # of the default's frame (docs/speed.md; Bullet's stage of the canonical turn: 1.31 ms a frame
@@ -722,6 +748,12 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
     "fast": {"physics": {"ccd": False}},
     "default": {},
     "reference": {
+        "contacts": {"spacing": REFERENCE_CONTOUR, "outline_smoothing": OUTLINE_SMOOTHING},
+        "proxy": {
+            "particle_mass": ProxyConfig.particle_mass / 2,
+            "mass_ratio": ProxyConfig.mass_ratio / 2,
+            "down_force": ProxyConfig.down_force / 2,
+        },
         "physics": {
             "substeps": 8,
             "substep_travel": 0.00025,

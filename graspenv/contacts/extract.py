@@ -201,16 +201,18 @@ class Outlines(NamedTuple):
     centroids: NDArray[np.float64]
 
 
-def find_outlines(mask: NDArray[np.uint8], min_area: float = 0.0) -> Outlines:
+def find_outlines(mask: NDArray[np.uint8], min_area: float = 0.0, passes: int = 0) -> Outlines:
     """The components of a validated mask as arrays (:class:`Outlines`): one OpenCV
     call, then one compiled pass for areas, centroids, order and outlines.
 
     Args:
         mask: uint8 image, shape (H, W), non-zero = touched (see :func:`validate_mask`).
         min_area: components with fewer pixels than this are dropped.
+        passes: pairs of shrink-free smoothing passes along each outline
+            (``ContactConfig.outline_smoothing``).
     """
     chains, chain_bounds = traced_chains(mask)
-    return components(chains, chain_bounds, mask.shape[1], float(min_area))
+    return components(chains, chain_bounds, mask.shape[1], float(min_area), passes)
 
 
 def traced_chains(mask: NDArray[np.uint8]) -> tuple[NDArray[np.int32], NDArray[np.intp]]:
@@ -229,16 +231,21 @@ def traced_chains(mask: NDArray[np.uint8]) -> tuple[NDArray[np.int32], NDArray[n
 
 @njit
 def components(
-    all_chains: NDArray[np.int32], all_bounds: NDArray[np.intp], width: int, min_area: float
+    all_chains: NDArray[np.int32],
+    all_bounds: NDArray[np.intp],
+    width: int,
+    min_area: float,
+    passes: int = 0,
 ) -> Outlines:
     """:class:`Outlines` from traced chains (:func:`traced_chains`): areas and
     centroids, the components of at least ``min_area`` pixels in raster order of their
-    first pixel, and their outlines."""
+    first pixel, and their outlines, smoothed by ``passes`` more shrink-free pairs
+    (``ContactConfig.outline_smoothing``)."""
     areas, centroids, keys = _measure_chains(all_chains, all_bounds, width)
     kept = np.flatnonzero(areas >= min_area)
     order = kept[np.argsort(keys[kept], kind="mergesort")]
     chains, chain_bounds = gather(all_chains, all_bounds, order)
-    outlines, bounds = _outlines(chains.astype(np.float64), chain_bounds)
+    outlines, bounds = _outlines(chains.astype(np.float64), chain_bounds, passes)
     return Outlines(
         chains, chain_bounds, Polylines(outlines, bounds), areas[order], centroids[order]
     )
@@ -287,7 +294,7 @@ def outlines_from_chains(
         shape (len(chains) + 1,).
     """
     points = np.concatenate([np.asarray(c).reshape(-1, 2) for c in chains]).astype(np.float64)
-    return _outlines(points, bounds_of([len(c) for c in chains]))
+    return _outlines(points, bounds_of([len(c) for c in chains]), 0)
 
 
 @njit
@@ -349,10 +356,11 @@ def _measure_chains(
 
 @njit
 def _outlines(
-    points: NDArray[np.float64], bounds: NDArray[np.intp]
+    points: NDArray[np.float64], bounds: NDArray[np.intp], passes: int
 ) -> tuple[NDArray[np.float64], NDArray[np.intp]]:
     """The outline of every chain (module docstring): offset half a pixel outward,
-    capped where it doubles back, smoothed by [-1, 4, 10, 4, -1] / 16."""
+    capped where it doubles back, smoothed by [-1, 4, 10, 4, -1] / 16, then by
+    ``passes`` pairs of Taubin's passes (:func:`_taubin`)."""
     count = len(bounds) - 1
     # Every point of a chain stays, and each end where it doubles back (a point
     # whose neighbours coincide) becomes the two corners of a cap; a single pixel
@@ -394,7 +402,46 @@ def _outlines(
                 near = outlines[b1, d] + outlines[a1, d]
                 far = outlines[b2, d] + outlines[a2, d]
                 smoothed[i, d] = (10.0 * outlines[i, d] + 4.0 * near - far) / 16.0
+    if passes > 0:
+        _taubin(smoothed, out_bounds, fixed, passes)
     return smoothed, out_bounds
+
+
+# Taubin's pair of passes (G. Taubin, "A signal processing approach to fair surface
+# design", SIGGRAPH 1995): x += λ·Δx, then x += μ·Δx with μ < −λ, Δ the discrete
+# Laplacian along the outline. The first shrinks, the second grows it back: the pair
+# passes wavelengths longer than about 1/k_PB = 1/(1/λ + 1/μ) ≈ 9 points unchanged and
+# damps shorter ones (the staircase's one- to three-pixel steps).
+_TAUBIN_LAMBDA = 0.5
+_TAUBIN_MU = -0.53
+# Outlines with fewer points are left as the first filter made them: on a blob a few
+# pixels across every wavelength is short, and the pair would round off its shape.
+_TAUBIN_FROM = 16
+
+
+@njit
+def _taubin(
+    outlines: NDArray[np.float64], bounds: NDArray[np.intp], fixed: NDArray[np.bool_], passes: int
+) -> None:
+    """Smooth every outline of at least :data:`_TAUBIN_FROM` points in place by
+    ``passes`` pairs of Taubin's λ|μ passes; ``fixed`` rows (the corners of caps) stay."""
+    source = np.empty_like(outlines)
+    for step in range(2 * passes):
+        factor = _TAUBIN_LAMBDA if step % 2 == 0 else _TAUBIN_MU
+        source[:] = outlines
+        for c in range(len(bounds) - 1):
+            lo, hi = bounds[c], bounds[c + 1]
+            size = hi - lo
+            if size < _TAUBIN_FROM:
+                continue
+            for i in range(lo, hi):
+                if fixed[i]:
+                    continue
+                k = i - lo
+                before, after = lo + (k - 1) % size, lo + (k + 1) % size
+                for d in range(2):
+                    laplacian = 0.5 * (source[before, d] + source[after, d]) - source[i, d]
+                    outlines[i, d] = source[i, d] + factor * laplacian
 
 
 @njit

@@ -301,6 +301,7 @@ class ContactTracker:
             transform=np.array([sx, sy, surface.size[0], surface.size[1]], dtype=float),
             radius=self.config.match_radius,
             spacing=self._spacing,
+            outline_passes=self.config.outline_smoothing,
         )
         self._previous = ContactFrame.empty()
         self._next_id = 0
@@ -366,6 +367,7 @@ class _Settings(NamedTuple):
         transform: pixels to world, ``(sx, sy, w, h)`` (:func:`_to_world`).
         radius: ``ContactConfig.match_radius``, metres.
         spacing: the contours' spacing, metres.
+        outline_passes: ``ContactConfig.outline_smoothing``.
     """
 
     width: int
@@ -374,6 +376,7 @@ class _Settings(NamedTuple):
     transform: NDArray[np.float64]
     radius: float
     spacing: float
+    outline_passes: int
 
 
 @njit
@@ -393,7 +396,9 @@ def _track_frame(
         index here of the contact each merged into without keeping its id (or -1),
         and which are removed, shapes (P,).
     """
-    found = components(chains, chain_bounds, settings.width, settings.min_area)
+    found = components(
+        chains, chain_bounds, settings.width, settings.min_area, settings.outline_passes
+    )
     areas, bounds = found.areas, found.outlines.bounds
     count = len(areas)
     world_outlines, _ = orient_ccw_kernel(

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from graspenv.bench.contact_scenes import ellipse_mask, ellipse_signed_distance
 from graspenv.contacts import find_components, outline_from_chain, signed_area, validate_mask
-from graspenv.contacts.extract import outlines_from_chains
+from graspenv.contacts.extract import find_outlines, outlines_from_chains
 
 
 def _pixel_counts(mask: np.ndarray) -> list[int]:
@@ -200,6 +200,26 @@ def test_outline_has_no_bias_over_random_fingertips() -> None:
         traced_errors.append(ellipse_signed_distance(component.chain.astype(float), c, axes, angle))
     assert abs(float(np.mean(np.concatenate(outline_errors)))) < 0.05
     assert float(np.mean(np.concatenate(traced_errors))) == pytest.approx(-0.46, abs=0.05)
+
+
+def test_shrink_free_smoothing_damps_the_staircase_without_shrinking() -> None:
+    """``ContactConfig.outline_smoothing``: six pairs of Taubin's passes take the
+    outline's scatter about the analytic edge down by a fifth (measured 0.186 px →
+    0.146 px RMS over these 60 fingertips) and move its mean by 0.011 px; as many
+    plain Laplacian passes would pull it about a third of a pixel inward."""
+    rng = np.random.default_rng(20)
+    plain, smoothed = [], []
+    for _ in range(60):
+        c = rng.uniform(28.0, 36.0, size=2)
+        axes = (float(rng.uniform(6.3, 12.6)), float(rng.uniform(6.3, 12.6)))
+        angle = float(rng.uniform(0.0, np.pi))
+        mask = ellipse_mask((64, 64), c, axes, angle)
+        for passes, errors in ((0, plain), (6, smoothed)):
+            outline = find_outlines(mask, 0.0, passes).outlines.points
+            errors.append(ellipse_signed_distance(outline, c, axes, angle))
+    before, after = np.concatenate(plain), np.concatenate(smoothed)
+    assert abs(float(after.mean() - before.mean())) < 0.03
+    assert np.sqrt(np.mean(after**2)) < 0.85 * np.sqrt(np.mean(before**2))
 
 
 @pytest.mark.parametrize("with_lines", [False, True])

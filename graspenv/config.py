@@ -54,8 +54,8 @@ MOST_VOTE_FRAMES = 15
 
 #: Particle sphere radius, metres, by default (``proxy.particle_radius``).
 DEFAULT_PARTICLE_RADIUS = 0.002
-#: Pairs of shrink-free passes along each outline at the default
-#: (``ContactConfig.outline_smoothing``).
+#: Pairs of shrink-free passes along each outline that the ``reference`` preset's
+#: finer contour needs (``ContactConfig.outline_smoothing``; the default has none).
 OUTLINE_SMOOTHING = 6
 
 ShapeName = Literal["box", "sphere", "cylinder"]
@@ -141,15 +141,18 @@ class ContactConfig:
             a contact's motion and on a lift (README, "A real sensor's masks").
         outline_smoothing: pairs of Taubin's shrink-free smoothing passes along each
             traced outline, after its own [-1, 4, 10, 4, -1] / 16 filter
-            (:mod:`graspenv.contacts.extract`); 0 turns it off. They damp what is
-            left of the pixel staircase, which the contour's points would otherwise
-            follow from frame to frame as the fingers cross the pixels, without
-            shrinking a fingertip's outline (its scatter about a true ellipse's edge
-            0.177 → 0.143 px RMS, its mean −0.016 → −0.005 px,
-            ``python -m graspenv.bench.outline``). Six (the default) narrow the
-            turn's scatter over sub-pixel placements by a quarter to two fifths and
-            let a finer contour (the ``reference`` preset's) turn without the
-            staircase's lag (docs/accuracy.md, "A reference that converges").
+            (:mod:`graspenv.contacts.extract`); 0 (the default) turns it off. They
+            damp what is left of the pixel staircase, which the contour's points
+            would otherwise follow from frame to frame as the fingers cross the
+            pixels, without shrinking a fingertip's outline (its scatter about a
+            true ellipse's edge 0.177 → 0.143 px RMS, its mean −0.016 → −0.005 px
+            at six, ``python -m graspenv.bench.outline``). A contour sampled finer
+            than the default's needs them: without, a 2 mm contour lags the turn on
+            small objects; the ``reference`` preset's has six
+            (:data:`OUTLINE_SMOOTHING`). At the default's 4 mm contour six gain
+            little (over the grid the turn 0.008° nearer, two more cylinders of 100
+            within 5 % of Coulomb) and are not taken (docs/accuracy.md, "A reference
+            that converges").
     """
 
     spacing: float | Literal["auto"] = "auto"
@@ -158,7 +161,7 @@ class ContactConfig:
     close_px: int = 0
     fill_px: int = 0
     vote_frames: int = 1
-    outline_smoothing: int = OUTLINE_SMOOTHING
+    outline_smoothing: int = 0
 
     def __post_init__(self) -> None:
         if self.spacing != "auto":
@@ -711,6 +714,9 @@ class SceneConfig:
         return _build(SceneConfig, _merge(to_dict(self), sections), "scene", "<overrides>")
 
 
+#: The reference's contour spacing, metres: half the default's at its particle radius.
+REFERENCE_CONTOUR = DEFAULT_PARTICLE_RADIUS
+
 #: Fidelity presets: section overrides from the cheapest to the most faithful, chosen
 #: from the speed-against-error frontier that ``graspenv bench`` measures and the
 #: grasp-space grid (docs/speed.md, "Speed against error"; docs/accuracy.md).
@@ -722,16 +728,14 @@ class SceneConfig:
 #: (2 mm at the default's 2 mm particles, :data:`REFERENCE_CONTOUR`), each particle
 #: half as heavy so that the grip is as stiff per millimetre of contour (half
 #: ``proxy.particle_mass``, ``mass_ratio`` and ``down_force``: the same
-#: ``SceneConfig.particle_scale``), the outline smoothed as at the default. Without
+#: ``SceneConfig.particle_scale``), its outline smoothed by :data:`OUTLINE_SMOOTHING`
+#: pairs of shrink-free passes, which the default does without. Without
 #: the shrink-free outline smoothing (``contacts.outline_smoothing``) the finer
 #: contour followed the pixels' staircase and turned further off (0.254° against
 #: 0.159° over the grid at seed 0); with it, over the grid at four placements, paired
 #: with the default: turn 0.138° against 0.166°, slide 0.100 % against 0.115 %, slip
 #: 0.44 % against 0.63 %, every cylinder within 5 % of Coulomb (docs/accuracy.md,
 #: "A reference that converges").
-#: The reference's contour spacing, metres: half the default's at its particle radius.
-REFERENCE_CONTOUR = DEFAULT_PARTICLE_RADIUS
-
 FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
     # The default's model without continuous collision detection, which cost half
     # of the default's frame (docs/speed.md; Bullet's stage of the canonical turn: 1.31 ms a frame
@@ -771,22 +775,24 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
 #: Each preset's measured error: the worst drift, millimetres, of the final object
 #: poses of the benchmark's scenarios against the reference preset, each the mean
 #: over three sub-pixel placements (``graspenv bench``, docs/speed.md, "Speed
-#: against error"), with the sub-steps that follow the motion (``physics.substep_travel``);
-#: the worst scenario is the flick for both (measured 2026-12-06 after CCD's sphere
-#: shrank, ``graspenv bench --replays 1``; the default's was the two-hand carry's
-#: 0.079 mm before). ``fast`` drifts no more than the default: both are within a
-#: tenth of a millimetre of the reference in every scenario, so ``auto`` picks
-#: ``fast`` for any budget of 0.053 mm or more (the old ``fast``, now
-#: envs_configs/coarse.toml, drifted 17.7 mm on the flick).
-PRESET_DRIFT_MM: dict[str, float] = {"fast": 0.053, "default": 0.053, "reference": 0.0}
+#: against error"). Since the reference samples the contour at 2 mm (2026-12-07,
+#: ``graspenv bench``), the worst for both is the noisy turn's, 1.67 mm: its masks'
+#: holes and jitter send a finer contour's grip elsewhere (that turn's error spreads
+#: by degrees over placements at every preset); on clean masks both end within
+#: 0.7 mm of the reference (the flick's 0.68 mm; the turn's, the slide's and the
+#: two-hand carry's within 0.09 mm). When the reference had the default's contour
+#: both were within 0.053 mm (the flick). ``fast`` drifts no more than the default,
+#: so ``auto`` picks ``fast`` for any budget of 1.67 mm or more (the old ``fast``, now
+#: envs_configs/coarse.toml, drifts 20 mm on the flick).
+PRESET_DRIFT_MM: dict[str, float] = {"fast": 1.67, "default": 1.67, "reference": 0.0}
 
 
 def choose_fidelity(error_budget_mm: float) -> str:
     """The cheapest preset whose measured drift (:data:`PRESET_DRIFT_MM`) is within
     ``error_budget_mm``; ``reference`` when none is.
 
-    ``fast`` drifts no more than the default (both within the placements' spread of
-    the reference), so a budget of its drift or more gives ``fast``, which has no
+    ``fast`` drifts no more than the default (their drifts agree to 0.001 mm in
+    every scenario), so a budget of its drift or more gives ``fast``, which has no
     CCD (the guard against hard strikes), and a smaller one gives ``reference``:
     the default is chosen by name only.
 

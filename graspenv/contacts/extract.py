@@ -23,7 +23,12 @@ cap half a pixel beyond the end pixel, and a single pixel becomes its square
 footprint, so every outline encloses a positive area. Outlines of eight points or
 more are then smoothed once by [-1, 4, 10, 4, -1] / 16, which removes the pixel
 staircase (otherwise 5 % longer than the edge and a cause of uneven resampling)
-without shrinking curves.
+without shrinking curves. Outlines of sixteen points or more may then be smoothed by
+``contacts.outline_smoothing`` pairs of Taubin's shrink-free passes (none at the
+default, six at the ``reference`` preset; :func:`_taubin`), which damp the
+staircase's remaining one- to three-pixel ripple: a contour sampled finer than a
+few pixels would otherwise follow it point by point, and it changes every frame as
+the fingers cross the pixels.
 
 Measured against the analytic boundary of 400 random ellipses with 6.3-12.6 px
 semi-axes (6-12 mm fingertips on the default table): signed distance of outline
@@ -34,10 +39,16 @@ vertices and edge midpoints in pixels, and outline length over the true perimete
 mask rendered by  outline      mean      RMS      largest |.|  length
 ================  ===========  ========  =======  ===========  ==========
 pixel centres     traced       -0.460    0.516    1.006        1.005
-pixel centres     this module  -0.016    0.177    0.537        1.011
+pixel centres     offset       -0.016    0.177    0.537        1.011
+pixel centres     smoothed     -0.005    0.143    0.501        1.003
 ``cv2.ellipse``   traced       -0.072    0.271    0.944        1.055
-``cv2.ellipse``   this module  +0.370    0.427    1.018        1.055
+``cv2.ellipse``   offset       +0.370    0.427    1.018        1.055
+``cv2.ellipse``   smoothed     +0.381    0.422    0.954        1.044
 ================  ===========  ========  =======  ===========  ==========
+
+("offset": the offset outline with its first filter, what ``find_components`` and the
+default's tracker give; "smoothed": with six pairs of shrink-free passes as well, the
+``reference`` preset's.)
 
 The offset is kept: it removes the half-pixel shrinkage that would make every
 contact about a pixel narrower than the finger. Mind the renderer, though: OpenCV's

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import cv2
 import numpy as np
 import pytest
@@ -11,6 +13,8 @@ from hypothesis import strategies as st
 from graspenv.bench.contact_scenes import ellipse_mask, ellipse_signed_distance
 from graspenv.contacts import find_components, outline_from_chain, signed_area, validate_mask
 from graspenv.contacts.extract import find_outlines, outlines_from_chains
+
+Axes = tuple[float, float]
 
 
 def _pixel_counts(mask: np.ndarray) -> list[int]:
@@ -188,13 +192,19 @@ def test_outline_is_within_a_pixel_of_the_analytic_ellipse(
     assert np.hypot(*(component.centroid - c)) < 0.35
 
 
-def test_outline_has_no_bias_over_random_fingertips() -> None:
-    rng = np.random.default_rng(20)
-    outline_errors, traced_errors = [], []
-    for _ in range(60):
+def _fingertips(count: int = 60, seed: int = 20) -> Iterator[tuple[np.ndarray, Axes, float]]:
+    """Random fingertip ellipses (centre, semi-axes, angle) on a 64 × 64 mask: 6-12 mm
+    on the default table."""
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
         c = rng.uniform(28.0, 36.0, size=2)
         axes = (float(rng.uniform(6.3, 12.6)), float(rng.uniform(6.3, 12.6)))
-        angle = float(rng.uniform(0.0, np.pi))
+        yield c, axes, float(rng.uniform(0.0, np.pi))
+
+
+def test_outline_has_no_bias_over_random_fingertips() -> None:
+    outline_errors, traced_errors = [], []
+    for c, axes, angle in _fingertips():
         (component,) = find_components(ellipse_mask((64, 64), c, axes, angle))
         outline_errors.append(ellipse_signed_distance(component.outline, c, axes, angle))
         traced_errors.append(ellipse_signed_distance(component.chain.astype(float), c, axes, angle))
@@ -207,12 +217,8 @@ def test_shrink_free_smoothing_damps_the_staircase_without_shrinking() -> None:
     outline's scatter about the analytic edge down by a fifth (measured 0.186 px →
     0.146 px RMS over these 60 fingertips) and move its mean by 0.011 px; as many
     plain Laplacian passes would pull it about a third of a pixel inward."""
-    rng = np.random.default_rng(20)
     plain, smoothed = [], []
-    for _ in range(60):
-        c = rng.uniform(28.0, 36.0, size=2)
-        axes = (float(rng.uniform(6.3, 12.6)), float(rng.uniform(6.3, 12.6)))
-        angle = float(rng.uniform(0.0, np.pi))
+    for c, axes, angle in _fingertips():
         mask = ellipse_mask((64, 64), c, axes, angle)
         for passes, errors in ((0, plain), (6, smoothed)):
             outline = find_outlines(mask, 0.0, passes).outlines.points

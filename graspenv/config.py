@@ -40,6 +40,7 @@ __all__ = [
     "load_config",
     "read_config",
     "read_config_file",
+    "refined_contour",
     "resolve_fidelity",
     "scene_from",
 ]
@@ -714,22 +715,24 @@ class SceneConfig:
         return _build(SceneConfig, _merge(to_dict(self), sections), "scene", "<overrides>")
 
 
-#: The reference's contour spacing, metres: half the default's at its particle radius.
-REFERENCE_CONTOUR = DEFAULT_PARTICLE_RADIUS
+#: The reference samples the scene's contour this many times as finely, each particle
+#: this many times lighter (:func:`refined_contour`).
+REFERENCE_REFINEMENT = 2
 
 #: Fidelity presets: section overrides from the cheapest to the most faithful, chosen
 #: from the speed-against-error frontier that ``graspenv bench`` measures and the
 #: grasp-space grid (docs/speed.md, "Speed against error"; docs/accuracy.md).
 #: ``reference`` is the setting the benchmark's drift is measured against: the
-#: default refined in space and in time, each pinned so that a scene file cannot make
-#: its reference coarser. In time: the default's body model (objects in reduced
+#: scene refined in time and in space. In time, pinned here so that a scene file
+#: cannot make its reference coarser: the default's body model (objects in reduced
 #: coordinates, contact ERP 0.4, the 20 N clamp, CCD) with twice the sub-steps and
-#: solver iterations. In space: the contour sampled at half the default's spacing
-#: (2 mm at the default's 2 mm particles, :data:`REFERENCE_CONTOUR`), each particle
-#: half as heavy so that the grip is as stiff per millimetre of contour (half
-#: ``proxy.particle_mass``, ``mass_ratio`` and ``down_force``: the same
-#: ``SceneConfig.particle_scale``), its outline smoothed by :data:`OUTLINE_SMOOTHING`
-#: pairs of shrink-free passes, which the default does without. Without
+#: solver iterations. In space, relative to the scene (:func:`refined_contour`, which
+#: :func:`at_fidelity` applies): the scene's own contour sampled
+#: :data:`REFERENCE_REFINEMENT` times as finely (2 mm at the default's 4 mm), each
+#: particle as many times lighter so that the grip is as stiff per millimetre of
+#: contour, its outline smoothed by :data:`OUTLINE_SMOOTHING` pairs of shrink-free
+#: passes, which the default does without. The clamp stays 20 N a particle, so a
+#: fingertip's particles together may push twice as hard. Without
 #: the shrink-free outline smoothing (``contacts.outline_smoothing``) the finer
 #: contour followed the pixels' staircase and turned further off (0.254° against
 #: 0.159° over the grid at seed 0); with it, over the grid at four placements, paired
@@ -742,7 +745,7 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
     # with it, 0.33 ms without; per-stage minima of one bench run, CCD then sweeping
     # the whole particle). Every error within twice the default's (2026-12-06: turn
     # 0.18° against 0.11°, the slide, the slip, the two-hand carry and the noisy
-    # turn level, every drift within 0.06 mm of the reference); since CCD sweeps a
+    # turn level, every drift within 0.06 mm of the reference of then); since CCD sweeps a
     # quarter of the particle (``physics.ccd_sphere``) every error of the bench is
     # the default's to the digit, CCD acting only on strikes. The sub-steps that
     # follow the motion keep fast strikes out of objects without CCD, up to the cap
@@ -751,13 +754,8 @@ FIDELITY_PRESETS: dict[str, dict[str, dict[str, Any]]] = {
     # off) is envs_configs/coarse.toml, and ``coarse`` in the benchmark.
     "fast": {"physics": {"ccd": False}},
     "default": {},
+    # Refined in space as well by :func:`refined_contour` (:func:`at_fidelity`).
     "reference": {
-        "contacts": {"spacing": REFERENCE_CONTOUR, "outline_smoothing": OUTLINE_SMOOTHING},
-        "proxy": {
-            "particle_mass": ProxyConfig.particle_mass / 2,
-            "mass_ratio": ProxyConfig.mass_ratio / 2,
-            "down_force": ProxyConfig.down_force / 2,
-        },
         "physics": {
             "substeps": 8,
             "substep_travel": 0.00025,
@@ -836,8 +834,31 @@ def at_fidelity(
     Raises:
         ValueError: as :func:`resolve_fidelity`.
     """
-    preset = FIDELITY_PRESETS[resolve_fidelity(fidelity, error_budget)]
-    return scene.replace(**preset) if preset else scene
+    name = resolve_fidelity(fidelity, error_budget)
+    preset = FIDELITY_PRESETS[name]
+    scene = scene.replace(**preset) if preset else scene
+    return refined_contour(scene) if name == "reference" else scene
+
+
+def refined_contour(scene: SceneConfig, factor: float = REFERENCE_REFINEMENT) -> SceneConfig:
+    """``scene`` with its contour sampled ``factor`` times as finely and each
+    particle ``factor`` times lighter (its mass, its share of the lightest object and
+    its press on the table: the same ``particle_scale``), so that the grip is as stiff
+    per metre of contour; its outline smoothed by at least :data:`OUTLINE_SMOOTHING`
+    pairs of shrink-free passes, without which a finer contour follows the pixels'
+    staircase. The ``reference`` preset's refinement in space (:data:`FIDELITY_PRESETS`)."""
+    contacts, proxy = scene.contacts, scene.proxy
+    return scene.replace(
+        contacts={
+            "spacing": contacts.contour_spacing(proxy.particle_radius) / factor,
+            "outline_smoothing": max(contacts.outline_smoothing, OUTLINE_SMOOTHING),
+        },
+        proxy={
+            "particle_mass": proxy.particle_mass / factor,
+            "mass_ratio": proxy.mass_ratio / factor,
+            "down_force": proxy.down_force / factor,
+        },
+    )
 
 
 def to_dict(config: Any) -> Any:

@@ -223,22 +223,36 @@ def test_a_tall_object_gets_shorter_sub_steps() -> None:
         load_config(None, proxy={"effective_mass_ratio": -1.0})
 
 
-def test_the_reference_halves_the_contour_at_the_same_stiffness_per_length() -> None:
-    """The reference refines the default in space: half the contour spacing, each
-    particle half as heavy (its mass, the share of the lightest object and the
-    table's press), so the particles per metre double and the grip's stiffness per
-    metre of contour stays; the outline is smoothed, which the finer contour needs."""
-    for objects in (None, [asdict(ObjectConfig("can", "cylinder", (0.02, 0.05), mass=0.05))]):
-        scene = load_config(None) if objects is None else load_config(None, objects=objects)
-        ref = at_fidelity(scene, "reference")
-        assert ref.contacts.contour_spacing(ref.proxy.particle_radius) == pytest.approx(
-            scene.contacts.contour_spacing(scene.proxy.particle_radius) / 2
-        )
-        masses = [c.proxy.particle_mass * c.particle_scale for c in (scene, ref)]
-        presses = [c.proxy.down_force * c.particle_scale for c in (scene, ref)]
-        assert masses[1] == pytest.approx(masses[0] / 2)
-        assert presses[1] == pytest.approx(presses[0] / 2)
-        assert (scene.contacts.outline_smoothing, ref.contacts.outline_smoothing) == (0, 6)
+@pytest.mark.parametrize(
+    "sections",
+    [
+        {},
+        {"objects": [asdict(ObjectConfig("can", "cylinder", (0.02, 0.05), mass=0.05))]},
+        {"proxy": {"particle_radius": 0.003}},
+        {"contacts": {"spacing": 0.001}},
+        {"proxy": {"mass_ratio": 0.0}},
+        {"proxy": {"particle_mass": 0.04}},
+    ],
+    ids=["default", "light-can", "radius-3mm", "spacing-1mm", "no-mass-ratio", "heavy"],
+)
+def test_the_reference_halves_the_scenes_contour_at_the_same_stiffness_per_length(
+    sections: dict,
+) -> None:
+    """The reference refines the scene in space (``refined_contour``): its own contour
+    spacing halved, each particle half as heavy (its mass and the table's press), so
+    the particles per metre double and the grip's stiffness per metre of contour
+    stays; the outline is smoothed, which the finer contour needs."""
+    scene = load_config(None, **sections)
+    ref = at_fidelity(scene, "reference")
+    assert ref.contacts.contour_spacing(ref.proxy.particle_radius) == pytest.approx(
+        scene.contacts.contour_spacing(scene.proxy.particle_radius) / 2
+    )
+    masses = [c.proxy.particle_mass * c.particle_scale for c in (scene, ref)]
+    presses = [c.proxy.down_force * c.particle_scale for c in (scene, ref)]
+    assert masses[1] == pytest.approx(masses[0] / 2)
+    assert presses[1] == pytest.approx(presses[0] / 2)
+    assert (scene.contacts.outline_smoothing, ref.contacts.outline_smoothing) == (0, 6)
+    assert ref.physics.substeps == 8 and ref.proxy.particle_radius == scene.proxy.particle_radius
 
 
 @pytest.mark.parametrize("key", ["close_px", "fill_px", "outline_smoothing"])

@@ -50,10 +50,11 @@ from graspenv.bench.scenarios import (
     Offset,
     placement_offsets,
 )
-from graspenv.config import FIDELITY_PRESETS, SceneConfig, load_config
+from graspenv.config import FIDELITY_PRESETS, SceneConfig, at_fidelity, load_config
 
 __all__ = [
     "COARSE",
+    "PRESET_SETTINGS",
     "QUICK_SCENARIOS",
     "QUICK_SETTINGS",
     "REFERENCE",
@@ -62,11 +63,13 @@ __all__ = [
     "measure_reference_row",
     "play_task",
     "run_bench",
+    "setting_scene",
     "summarise",
     "warm_up",
 ]
 
-#: The reference fidelity (graspenv/config.py, FIDELITY_PRESETS, says what it holds).
+#: The reference fidelity's section overrides (graspenv/config.py, FIDELITY_PRESETS,
+#: says what it holds); :func:`setting_scene` also refines its contour.
 REFERENCE = FIDELITY_PRESETS["reference"]
 
 #: The cheapest setting measured, the ``fast`` preset until 2026-12-06; the same as
@@ -122,6 +125,19 @@ QUICK_SETTINGS = (
     "reference",
 )
 QUICK_SCENARIOS = ("turn", "slide", "slip", "two hands")
+
+
+#: The settings that are fidelity presets, played as the environments play them.
+PRESET_SETTINGS = {"reference": "reference", "preset:fast": "fast"}
+
+
+def setting_scene(base: SceneConfig, setting: str) -> SceneConfig:
+    """``base`` at a setting of :data:`SETTINGS`: a preset through
+    :func:`~graspenv.config.at_fidelity` (the reference's contour refined from the
+    scene's own), any other with its overrides merged over it."""
+    if setting in PRESET_SETTINGS:
+        return at_fidelity(base, PRESET_SETTINGS[setting])
+    return base.replace(**SETTINGS[setting])
 
 
 def _mean_errors(plays: Sequence[Played]) -> dict[str, float]:
@@ -243,11 +259,11 @@ def warm_up(
         return
     if progress is not None:
         progress("warming up: every scenario and setting once, untimed")
-    first = base.replace(**SETTINGS[order[0]])
+    first = setting_scene(base, order[0])
     for scenario in scenarios:
         SCENARIOS[scenario](first, (0.0, 0.0), replays=1)
     for setting in order[1:]:
-        SCENARIOS[scenarios[0]](base.replace(**SETTINGS[setting]), (0.0, 0.0), replays=1)
+        SCENARIOS[scenarios[0]](setting_scene(base, setting), (0.0, 0.0), replays=1)
 
 
 def run_bench(
@@ -297,7 +313,7 @@ def run_bench(
     total = len(order) * len(scenarios)
     done = 0
     for setting in order:
-        scene = base.replace(**SETTINGS[setting])
+        scene = setting_scene(base, setting)
         for scenario in scenarios:
             done += 1
             if progress is not None:
@@ -327,15 +343,14 @@ def _run_on_ray(
     cluster.connect(address)
     jobs = [(setting, scenario) for setting in order for scenario in scenarios]
     calls = [
-        (scenario, base.replace(**SETTINGS[setting]), offsets, replays)
-        for setting, scenario in jobs
+        (scenario, setting_scene(base, setting), offsets, replays) for setting, scenario in jobs
     ]
     played = dict(zip(jobs, cluster.run_tasks(play_task, calls, "bench runs"), strict=True))
     results = []
     for setting, scenario in jobs:
         plays, node = played[setting, scenario]
         references = None if setting == "reference" else played["reference", scenario][0]
-        scene = base.replace(**SETTINGS[setting])
+        scene = setting_scene(base, setting)
         result = summarise(setting, scenario, scene, plays, references, node)
         if setting == "reference":
             result = measure_reference_row(result)

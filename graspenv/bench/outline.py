@@ -11,10 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from graspenv.bench.contact_scenes import RASTERISERS, ellipse_mask, ellipse_signed_distance
+from graspenv.config import OUTLINE_SMOOTHING
 from graspenv.contacts.extract import find_components, find_outlines
-
-#: Pairs of shrink-free passes for the "smoothed" row (``contacts.outline_smoothing``).
-SMOOTHED_PASSES = 6
 
 
 def _with_midpoints(poly: np.ndarray) -> np.ndarray:
@@ -35,7 +33,7 @@ def main(count: int = 400, seed: int = 0) -> None:
         for render in RASTERISERS:
             mask = ellipse_mask(shape, centre, axes, angle, render)
             (component,) = find_components(mask)
-            smoothed = find_outlines(mask, 0.0, SMOOTHED_PASSES).outlines.points
+            smoothed = find_outlines(mask, 0.0, OUTLINE_SMOOTHING).outlines.points
             for name, poly in (
                 ("traced", component.chain),
                 ("offset", component.outline),

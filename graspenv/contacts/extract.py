@@ -220,8 +220,13 @@ def find_outlines(mask: NDArray[np.uint8], min_area: float = 0.0, passes: int = 
         mask: uint8 image, shape (H, W), non-zero = touched (see :func:`validate_mask`).
         min_area: components with fewer pixels than this are dropped.
         passes: pairs of shrink-free smoothing passes along each outline
-            (``ContactConfig.outline_smoothing``).
+            (``ContactConfig.outline_smoothing``), a whole number >= 0.
+
+    Raises:
+        ValueError: ``passes`` is not a whole number >= 0.
     """
+    if not isinstance(passes, int | np.integer) or isinstance(passes, bool) or passes < 0:
+        raise ValueError(f"passes must be a whole number >= 0, got {passes!r}")
     chains, chain_bounds = traced_chains(mask)
     return components(chains, chain_bounds, mask.shape[1], float(min_area), passes)
 
@@ -420,13 +425,16 @@ def _outlines(
 
 # Taubin's pair of passes (G. Taubin, "A signal processing approach to fair surface
 # design", SIGGRAPH 1995): x += λ·Δx, then x += μ·Δx with μ < −λ, Δ the discrete
-# Laplacian along the outline. The first shrinks, the second grows it back: the pair
-# passes wavelengths longer than about 1/k_PB = 1/(1/λ + 1/μ) ≈ 9 points unchanged and
-# damps shorter ones (the staircase's one- to three-pixel steps).
+# Laplacian along the outline. The first shrinks, the second grows it back: a ripple
+# of w points, for which Δ takes k = 1 − cos(2π/w), passes the pair scaled by
+# (1 − λk)(1 − μk), unchanged below the pass band's k_PB = 1/λ + 1/μ ≈ 0.11 (w longer
+# than about 13 points) and damped above it, the more the shorter (a ripple of 4
+# points to a fifth over six pairs, of 2 points to nothing).
 _TAUBIN_LAMBDA = 0.5
 _TAUBIN_MU = -0.53
 # Outlines with fewer points are left as the first filter made them: on a blob a few
-# pixels across every wavelength is short, and the pair would round off its shape.
+# pixels across the whole outline is shorter than the pass band, and the pairs would
+# round off its shape.
 _TAUBIN_FROM = 16
 
 

@@ -228,6 +228,12 @@ def test_shrink_free_smoothing_damps_the_staircase_without_shrinking() -> None:
     assert np.sqrt(np.mean(after**2)) < 0.85 * np.sqrt(np.mean(before**2))
 
 
+@pytest.mark.parametrize("passes", [-1, 2.0, True])
+def test_smoothing_passes_must_be_a_whole_number(passes: object) -> None:
+    with pytest.raises(ValueError, match="passes"):
+        find_outlines(np.ones((8, 8), np.uint8), 0.0, passes)  # type: ignore[arg-type]
+
+
 @pytest.mark.parametrize("with_lines", [False, True])
 def test_outlines_of_many_chains_equal_one_chain_at_a_time(with_lines: bool) -> None:
     """Blobs of every size (the three smallest too small to smooth) in one vectorised

@@ -73,6 +73,26 @@ def test_contact_geometry_in_the_world_frame(finger: Finger) -> None:
         assert not array.flags.writeable
 
 
+def test_the_tracker_smooths_outlines_as_its_config_asks(surface: Surface) -> None:
+    """``contacts.outline_smoothing`` reaches the tracker's compiled frame: its
+    outlines lie nearer the fingertips' true edges (the staircase damped), not
+    shrunk."""
+    rng = np.random.default_rng(3)
+    errors: dict[int, list[np.ndarray]] = {0: [], 6: []}
+    for _ in range(20):
+        centre = rng.uniform(-0.1, 0.1, size=2)
+        finger = (centre, tuple(rng.uniform(0.006, 0.012, size=2)), float(rng.uniform(0, np.pi)))
+        mask = render_fingers(surface, [finger])
+        for passes, found in errors.items():
+            tracker = ContactTracker(surface, ContactConfig(outline_smoothing=passes))
+            (contact,) = tracker.update(mask)
+            found.append(world_ellipse_distance(contact.outline, finger))
+    plain, smoothed = (np.concatenate(errors[p]) for p in (0, 6))
+    pixel = float(np.max(surface.pixel_size))
+    assert abs(float(smoothed.mean() - plain.mean())) < 0.03 * pixel
+    assert np.sqrt(np.mean(smoothed**2)) < 0.9 * np.sqrt(np.mean(plain**2))
+
+
 def test_single_pixel_and_thin_line_still_have_a_contour(surface: Surface) -> None:
     tracker = ContactTracker(surface, ContactConfig(min_area=0.0))  # keep single pixels
     mask = np.zeros(surface.shape, dtype=np.uint8)

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -23,7 +23,7 @@ from numpy.typing import NDArray
 
 from graspenv.bench.fuzz import FingerPath, finger_hands
 from graspenv.bench.invariants import InvariantChecker, hand_speed
-from graspenv.config import ObjectConfig, SceneConfig, load_config, to_dict
+from graspenv.config import ObjectConfig, SceneConfig, at_fidelity, load_config, to_dict
 from graspenv.simulation import Simulation
 from graspenv.surface import (
     FingerMotion,
@@ -73,7 +73,13 @@ class Case:
         The masks stay those of the original scene: change the physics, proxy and
         contact sections, not the surface.
         """
-        return Case(self.name, self.scene.replace(**sections), self.masks, self.finger_speed)
+        return replace(self, scene=self.scene.replace(**sections))
+
+    def at_fidelity(self, fidelity: str) -> Case:
+        """The same case at one of the environments' presets
+        (:func:`graspenv.config.at_fidelity`: the reference's contour refined from the
+        case's own); the masks stay the original scene's, as for :meth:`with_sections`."""
+        return replace(self, scene=at_fidelity(self.scene, fidelity))
 
 
 def run(case: Case) -> InvariantChecker:

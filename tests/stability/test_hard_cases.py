@@ -9,12 +9,10 @@ what it measured before.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import replace
 
 import pytest
 
 from graspenv.bench.invariants import first_difference
-from graspenv.config import at_fidelity
 
 from . import _cases as cases
 from ._cases import Case, box, pinch_box
@@ -123,5 +121,4 @@ def test_hard_case_keeps_the_invariants_at_the_reference_fidelity(
     # The preset's sub-steps replace a case's own (the 1- and 16-sub-step cases run
     # at its eight); a case's control time stays; its contour is refined from the
     # case's own.
-    case = build()
-    cases.run(replace(case, scene=at_fidelity(case.scene, "reference"))).assert_ok()
+    cases.run(build().at_fidelity("reference")).assert_ok()
